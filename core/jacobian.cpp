@@ -1,0 +1,94 @@
+#include "core/jacobian.hpp"
+
+#include "core/kinematics.hpp"
+
+namespace core {
+
+const Matrix6X& compute_joint_jacobians(const Model& model, Data& data, const Eigen::VectorXd& q) {
+  forward_kinematics(model, data, q);
+  return compute_joint_jacobians(model, data);
+}
+
+const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
+  Matrix6X& J = data.J;
+  for (int i = 1; i < model.njoints; ++i) {
+    const Matrix3& R = data.X_W[i].R;
+    const Vector3& p = data.X_W[i].p;
+    const int c = model.idx_v[i];
+    // a rotation ω about an axis through p moves the world origin with p × ω
+    switch (model.joint_type[i]) {
+      case JointType::kFixed: break;
+      case JointType::kRevolute: {
+        const Vector3 w = R * model.axis[i];
+        J.col(c).head<3>() = w;
+        J.col(c).tail<3>() = p.cross(w);
+        break;
+      }
+      case JointType::kPrismatic:
+        J.col(c).head<3>().setZero();
+        J.col(c).tail<3>() = R * model.axis[i];
+        break;
+      case JointType::kSpherical:
+        for (int k = 0; k < 3; ++k) {
+          J.col(c + k).head<3>() = R.col(k);
+          J.col(c + k).tail<3>() = p.cross(R.col(k));
+        }
+        break;
+      case JointType::kFree:
+        for (int k = 0; k < 3; ++k) {
+          J.col(c + k).head<3>() = R.col(k);
+          J.col(c + k).tail<3>() = p.cross(R.col(k));
+          J.col(c + 3 + k).head<3>().setZero();
+          J.col(c + 3 + k).tail<3>() = R.col(k);
+        }
+        break;
+    }
+  }
+  return J;
+}
+
+void point_jacobian(const Model& model, const Data& data, int link, const Vector3& p_LinkPoint,
+                    FrameJacobian& J_out) {
+  J_out.angular.setZero(3, model.nv);
+  J_out.linear.setZero(3, model.nv);
+  const Vector3 p_W = data.X_W[link] * p_LinkPoint;
+  for (int j = link; j > 0; j = model.parent[j]) {
+    const int c0 = model.idx_v[j];
+    const int c1 = c0 + joint_nv(model.joint_type[j]);
+    for (int c = c0; c < c1; ++c) {
+      const Vector3 w = data.J.col(c).head<3>();
+      J_out.angular.col(c) = w;
+      J_out.linear.col(c) = data.J.col(c).tail<3>() + w.cross(p_W);
+    }
+  }
+}
+
+PointMotion point_velocity(const Model& /*model*/, const Data& data, int link,
+                           const Vector3& p_LinkPoint) {
+  const Motion& v = data.v[link];
+  const Matrix3& R = data.X_W[link].R;
+  return {R * v.angular, R * (v.linear + v.angular.cross(p_LinkPoint))};
+}
+
+namespace {
+// classical acceleration of a body point from a spatial acceleration (link frame)
+PointMotion classical_acceleration(const Data& data, int link, const Motion& a,
+                                   const Vector3& r) {
+  const Motion& v = data.v[link];
+  const Matrix3& R = data.X_W[link].R;
+  const Vector3 v_point = v.linear + v.angular.cross(r);
+  return {R * a.angular, R * (a.linear + a.angular.cross(r) + v.angular.cross(v_point))};
+}
+}  // namespace
+
+PointMotion point_jdot_v(const Model& /*model*/, const Data& data, int link,
+                         const Vector3& p_LinkPoint) {
+  return classical_acceleration(data, link, data.a_bias[link], p_LinkPoint);
+}
+
+PointMotion point_acceleration(const Model& /*model*/, const Data& data, int link,
+                               const Vector3& p_LinkPoint) {
+  return classical_acceleration(data, link, data.a[link], p_LinkPoint);
+}
+
+}  // namespace core

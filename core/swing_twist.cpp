@@ -1,0 +1,166 @@
+#include "core/swing_twist.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace core {
+
+namespace {
+constexpr double kPi = std::numbers::pi;
+
+// wrap to (−π, π]
+double wrap_angle(double x) {
+  x = std::remainder(x, 2 * kPi);
+  if (x <= -kPi) x += 2 * kPi;
+  return x;
+}
+
+// distance from point p to triangle abc in the plane, and barycentric coordinates
+double point_triangle_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                               const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  auto seg = [&](const Eigen::Vector2d& s0, const Eigen::Vector2d& s1) {
+    const Eigen::Vector2d d = s1 - s0;
+    const double t = std::clamp((p - s0).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+    return (s0 + t * d - p).norm();
+  };
+  return std::min({seg(a, b), seg(b, c), seg(c, a)});
+}
+
+bool barycentric(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                 const Eigen::Vector2d& c, Eigen::Vector3d& lambda) {
+  const Eigen::Vector2d e1 = b - a, e2 = c - a, d = p - a;
+  const double det = e1.x() * e2.y() - e1.y() * e2.x();
+  const double l1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
+  const double l2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
+  lambda = {1.0 - l1 - l2, l1, l2};
+  constexpr double kEdgeTolerance = -1e-12;
+  return lambda.minCoeff() >= kEdgeTolerance;
+}
+
+// distance of angle x (in (−π, π]) to the interval [lo, hi], modulo 2π
+double twist_excess(double x, double lo, double hi) {
+  double best = kInfinity;
+  for (int k = -2; k <= 2; ++k) {
+    const double y = x + 2 * kPi * k;
+    const double d = y < lo ? lo - y : (y > hi ? y - hi : 0.0);
+    best = std::min(best, d);
+  }
+  return best;
+}
+}  // namespace
+
+SwingTwist swing_twist(const Quaternion& q) {
+  SwingTwist out;
+  const double c = std::sqrt(q.w() * q.w() + q.x() * q.x());  // cos(φ/2)
+  if (c < 1e-9) {
+    // swing of π: the twist is undefined; report zero twist and the swing axis in the y–z plane
+    out.singular = true;
+    out.a_y = q.y();
+    out.a_z = q.z();
+    const double n = std::hypot(out.a_y, out.a_z);
+    if (n > 0) {
+      out.a_y /= n;
+      out.a_z /= n;
+    }
+    return out;
+  }
+  const double ct = q.w() / c, st = q.x() / c;  // cos(γ/2), sin(γ/2)
+  out.twist = wrap_angle(2.0 * std::atan2(q.x(), q.w()));
+  out.a_y = ct * q.y() - st * q.z();
+  out.a_z = st * q.y() + ct * q.z();
+  return out;
+}
+
+Quaternion from_swing_twist(double a_y, double a_z, double twist) {
+  const double c = std::sqrt(std::max(0.0, 1.0 - a_y * a_y - a_z * a_z));
+  const Quaternion swing(c, 0.0, a_y, a_z);
+  const Quaternion tw(std::cos(0.5 * twist), std::sin(0.5 * twist), 0.0, 0.0);
+  return swing * tw;
+}
+
+SwingTwist joint_swing_twist(const Model& model, int i, const Quaternion& q_joint) {
+  // change of basis into the range frame: q_range = F⁻¹ q F
+  const Quaternion& F = model.spherical_range[i].frame;
+  return swing_twist(F.conjugate() * q_joint * F);
+}
+
+Eigen::Vector2d swing_toward(double psi, double phi) {
+  // axis = x × (0, cos ψ, sin ψ) = (0, −sin ψ, cos ψ); a = sin(φ/2) axis
+  const double s = std::sin(0.5 * phi);
+  return {-s * std::sin(psi), s * std::cos(psi)};
+}
+
+RangeStatus check_range(const SphericalRange& range, const SwingTwist& st) {
+  RangeStatus out;
+  if (range.empty()) return out;
+  const Eigen::Vector2d a(st.a_y, st.a_z);
+  double best_twist_excess = kInfinity;
+  double swing_distance = kInfinity;
+  for (size_t t = 0; t < range.triangles.size(); ++t) {
+    const auto& tri = range.triangles[t];
+    const Eigen::Vector2d& A = range.swing[tri[0]];
+    const Eigen::Vector2d& B = range.swing[tri[1]];
+    const Eigen::Vector2d& C = range.swing[tri[2]];
+    Eigen::Vector3d l;
+    if (!barycentric(a, A, B, C, l)) {
+      swing_distance = std::min(swing_distance, point_triangle_distance(a, A, B, C));
+      continue;
+    }
+    swing_distance = 0;
+    const double lo = l[0] * range.twist_lower[tri[0]] + l[1] * range.twist_lower[tri[1]] +
+                      l[2] * range.twist_lower[tri[2]];
+    const double hi = l[0] * range.twist_upper[tri[0]] + l[1] * range.twist_upper[tri[1]] +
+                      l[2] * range.twist_upper[tri[2]];
+    const double excess = st.singular ? 0.0 : twist_excess(st.twist, lo, hi);
+    if (excess < best_twist_excess) {
+      best_twist_excess = excess;
+      out.triangle = static_cast<int>(t);
+      out.twist_lower = lo;
+      out.twist_upper = hi;
+    }
+    if (excess == 0) break;
+  }
+  if (out.triangle < 0) {
+    // |a| = sin(φ/2), so a distance d in the swing plane is at least 2d in swing angle
+    out.inside = false;
+    out.violation = 2.0 * swing_distance;
+    return out;
+  }
+  out.inside = best_twist_excess == 0;
+  out.violation = best_twist_excess;
+  return out;
+}
+
+SphericalRange directional_range(const std::vector<double>& psi,
+                                 const std::vector<double>& swing_max,
+                                 const std::vector<double>& twist_lower,
+                                 const std::vector<double>& twist_upper, double centre_twist_lower,
+                                 double centre_twist_upper) {
+  SphericalRange r;
+  const int n = static_cast<int>(psi.size());
+  r.swing.push_back(Eigen::Vector2d::Zero());
+  r.twist_lower.push_back(centre_twist_lower);
+  r.twist_upper.push_back(centre_twist_upper);
+  for (int k = 0; k < n; ++k) {
+    r.swing.push_back(swing_toward(psi[k], swing_max[k]));
+    r.twist_lower.push_back(twist_lower[k]);
+    r.twist_upper.push_back(twist_upper[k]);
+  }
+  for (int k = 0; k < n; ++k) r.triangles.push_back({0, 1 + k, 1 + (k + 1) % n});
+  return r;
+}
+
+SphericalRange cone_range(double swing_max, double twist_lower, double twist_upper,
+                          int segments) {
+  std::vector<double> psi, swing, lo, hi;
+  for (int k = 0; k < segments; ++k) {
+    psi.push_back(2 * kPi * k / segments);
+    swing.push_back(swing_max);
+    lo.push_back(twist_lower);
+    hi.push_back(twist_upper);
+  }
+  return directional_range(psi, swing, lo, hi, twist_lower, twist_upper);
+}
+
+}  // namespace core
