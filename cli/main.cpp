@@ -1,10 +1,13 @@
-// pindrag: one executable, one subcommand per batch job over the same libraries.
+// pindrag: one executable, one subcommand per job over the same libraries.
 #include <CLI/CLI.hpp>
-#include <iostream>
+
+#include "cli/commands.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"pindrag: pin-and-drag posing and animation of characters"};
   app.require_subcommand(1);
+  cli::add_info_command(app);
+  cli::add_character_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

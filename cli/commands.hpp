@@ -1,0 +1,12 @@
+// Subcommands of the pindrag executable; each lives in its own cmd_<name>.cpp.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace cli {
+
+/// Each add_* registers one subcommand and its callback on the app.
+void add_info_command(CLI::App& app);
+void add_character_command(CLI::App& app);
+
+}  // namespace cli
