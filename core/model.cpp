@@ -79,7 +79,8 @@ bool Model::operator==(const Model& o) const {
          axis == o.axis && axis_index == o.axis_index && idx_q == o.idx_q && idx_v == o.idx_v &&
          limits == o.limits && spherical_range == o.spherical_range &&
          ik_weight == o.ik_weight && ik_gain == o.ik_gain && inertia == o.inertia &&
-         collision == o.collision && visual == o.visual && joint_of_v == o.joint_of_v;
+         collision == o.collision && visual == o.visual && joint_of_v == o.joint_of_v &&
+         parent_v == o.parent_v;
 }
 
 }  // namespace core

@@ -124,6 +124,7 @@ struct Model {
   std::vector<std::vector<Geometry>> visual;
   // velocity coordinates (nv)
   std::vector<int> joint_of_v;
+  std::vector<int> parent_v;  // the velocity coordinate this one hangs from, or -1 (sparse LTDL)
 
   /// Index of the link (= its joint) with this link name, or -1.
   int link_index(std::string_view link) const;

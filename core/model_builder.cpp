@@ -357,8 +357,20 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
   m->nq = nq;
   m->nv = nv;
   m->joint_of_v.assign(nv, 0);
+  m->parent_v.assign(nv, -1);
   for (int i = 1; i < nj; ++i) {
-    for (int d = 0; d < joint_nv(m->joint_type[i]); ++d) m->joint_of_v[m->idx_v[i] + d] = i;
+    const int nvi = joint_nv(m->joint_type[i]);
+    if (nvi == 0) continue;
+    // the first coordinate hangs from the last coordinate of the nearest moving ancestor
+    int anc = m->parent[i];
+    while (anc > 0 && joint_nv(m->joint_type[anc]) == 0) anc = m->parent[anc];
+    const int first = m->idx_v[i];
+    m->parent_v[first] =
+        anc > 0 ? m->idx_v[anc] + joint_nv(m->joint_type[anc]) - 1 : -1;
+    for (int d = 0; d < nvi; ++d) {
+      m->joint_of_v[first + d] = i;
+      if (d > 0) m->parent_v[first + d] = first + d - 1;
+    }
   }
   // subtree ranges: in depth-first order a subtree ends where the next non-descendant starts
   for (int i = nj - 1; i >= 0; --i) {

@@ -1,0 +1,31 @@
+// Composite-rigid-body algorithm and the tree-sparse factorization of the joint-space inertia.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "core/data.hpp"
+#include "core/model.hpp"
+
+namespace core {
+
+/// Joint-space inertia H(q) with τ = H(q) a + b(q, v). RBDA §6.2; cross-checked against rnea()
+/// columns in tests/core/crba_test.cpp.
+/// @return data.M (nv x nv), full symmetric matrix; also fills data.X_P and data.Ic
+const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q);
+
+/// Factorizes H = Lᵀ D L exploiting branch-induced sparsity (RBDA §6.5, Table 6.3): L is zero
+/// wherever the coordinates are not on one root-to-leaf path, and the work is O(n d²) for depth d.
+/// Requires: crba(model, data, q). Writes data.LTDL.
+void factorize_mass_matrix(const Model& model, Data& data);
+
+/// Solves H x = b in place with the factorization (RBDA Table 6.4). Allocation-free.
+/// Requires: factorize_mass_matrix(model, data).
+void solve_mass_matrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> b);
+
+/// The same for every column of B.
+void solve_mass_matrix_columns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> B);
+
+/// y = L⁻ᵀ x in place (x is overwritten): the half solve used for J H⁻¹ Jᵀ = Yᵀ D⁻¹ Y.
+void solve_mass_matrix_lt(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x);
+
+}  // namespace core

@@ -1,0 +1,90 @@
+#include "core/osim.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "core/crba.hpp"
+
+namespace core {
+
+void handle_jacobian(const Model& model, const Data& data, const std::vector<Handle>& handles,
+                     Eigen::MatrixXd& J, FrameJacobian& scratch) {
+  int m = 0;
+  for (const Handle& h : handles) m += h.rows();
+  if (J.rows() != m || J.cols() != model.nv) J.resize(m, model.nv);
+  if (scratch.linear.cols() != model.nv) scratch = FrameJacobian(model.nv);
+  int row = 0;
+  for (const Handle& h : handles) {
+    point_jacobian(model, data, h.link, h.p_LinkPoint, scratch);
+    if (h.with_orientation) {
+      J.middleRows<3>(row) = scratch.angular;
+      row += 3;
+    }
+    J.middleRows<3>(row) = scratch.linear;
+    row += 3;
+  }
+}
+
+void inverse_operational_inertia(const Model& model, const Data& data,
+                                 const std::vector<Handle>& handles, OsimWorkspace& ws,
+                                 Eigen::MatrixXd& Phi) {
+  handle_jacobian(model, data, handles, ws.J, ws.point);
+  const Eigen::Index m = ws.J.rows();
+  if (ws.Y.rows() != model.nv || ws.Y.cols() != m) ws.Y.resize(model.nv, m);
+  ws.Y = ws.J.transpose();
+  for (Eigen::Index r = 0; r < m; ++r) {
+    solve_mass_matrix_lt(model, data, ws.Y.col(r));
+    for (int k = 0; k < model.nv; ++k) ws.Y(k, r) /= std::sqrt(data.LTDL(k, k));
+  }
+  if (Phi.rows() != m || Phi.cols() != m) Phi.resize(m, m);
+  Phi.noalias() = ws.Y.transpose() * ws.Y;
+}
+
+int operational_inertia(const Eigen::MatrixXd& Phi, Eigen::MatrixXd& Lambda, double rel_tol) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Phi);
+  const Eigen::VectorXd& ev = es.eigenvalues();
+  const double cutoff = rel_tol * std::max(ev.cwiseAbs().maxCoeff(), 1e-300);
+  Eigen::VectorXd inv = Eigen::VectorXd::Zero(ev.size());
+  int rank = 0;
+  for (Eigen::Index k = 0; k < ev.size(); ++k) {
+    if (ev[k] > cutoff) {
+      inv[k] = 1.0 / ev[k];
+      ++rank;
+    }
+  }
+  Lambda = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+  return rank;
+}
+
+void floating_base_split(const Model& model, const Data& data, const std::vector<Handle>& handles,
+                         const Eigen::VectorXd& bias, FloatingBaseSplit& out) {
+  const int nv = model.nv;
+  const int nq_joints = nv - 6;
+  Eigen::MatrixXd J;
+  FrameJacobian scratch(nv);
+  handle_jacobian(model, data, handles, J, scratch);
+  const int m = static_cast<int>(J.rows());
+  out.H_bb = data.M.topLeftCorner<6, 6>();
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> Hbb(out.H_bb);
+  const Eigen::MatrixXd J_b = J.leftCols<6>();
+  // X = J_b H_bb⁻¹ (m x 6)
+  const Eigen::MatrixXd X = Hbb.solve(J_b.transpose()).transpose();
+  out.Gamma = J.rightCols(nq_joints) - X * data.M.topRightCorner(6, nq_joints);
+  out.Phi_lock = X * J_b.transpose();
+  // ψ = J̇v − J_b H_bb⁻¹ b_b
+  out.psi.resize(m);
+  int row = 0;
+  for (const Handle& h : handles) {
+    const PointMotion jdv = point_jdot_v(model, data, h.link, h.p_LinkPoint);
+    if (h.with_orientation) {
+      out.psi.segment<3>(row) = jdv.angular;
+      row += 3;
+    }
+    out.psi.segment<3>(row) = jdv.linear;
+    row += 3;
+  }
+  out.psi -= X * bias.head<6>();
+}
+
+}  // namespace core

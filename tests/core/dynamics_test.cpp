@@ -1,0 +1,177 @@
+// Tests for core/rnea.hpp, core/crba.hpp, core/aba.hpp: each algorithm against a second path.
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+
+#include "core/aba.hpp"
+#include "core/configuration.hpp"
+#include "core/crba.hpp"
+#include "core/jacobian.hpp"
+#include "core/kinematics.hpp"
+#include "core/rnea.hpp"
+#include "tests/fixtures/allocation_counter.hpp"
+#include "tests/fixtures/fixtures.hpp"
+
+namespace {
+
+using namespace core;
+
+struct RandomState {
+  Eigen::VectorXd q, v, a, tau;
+};
+
+RandomState random_state(const Model& m, std::uint64_t seed) {
+  RandomState s;
+  s.q = random_configuration(m, seed);
+  s.v = difference(m, s.q, random_configuration(m, seed + 7777));
+  s.a = difference(m, s.q, random_configuration(m, seed + 8888)) * 3.0;
+  s.tau = difference(m, s.q, random_configuration(m, seed + 9999)) * 10.0;
+  return s;
+}
+
+std::vector<std::shared_ptr<const Model>> models() {
+  return {fixtures::branching_tree(), fixtures::chain(7)};
+}
+
+TEST(Crba, MatchesRneaColumns) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    for (std::uint64_t seed = 0; seed < 5; ++seed) {
+      const RandomState s = random_state(*m, seed);
+      const Eigen::MatrixXd M = crba(*m, d, s.q);
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m->nv);
+      const Eigen::VectorXd b = rnea(*m, d, s.q, zero, zero);
+      for (int i = 0; i < m->nv; ++i) {
+        const Eigen::VectorXd col = rnea(*m, d, s.q, zero, Eigen::VectorXd::Unit(m->nv, i)) - b;
+        EXPECT_LT((M.col(i) - col).norm(), 1e-12 * (1 + col.norm())) << m->name << " col " << i;
+      }
+    }
+  }
+}
+
+TEST(Crba, IsSymmetricPositiveDefinite) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 3));
+    EXPECT_EQ(M, M.transpose());
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(M).info(), Eigen::Success);
+  }
+}
+
+TEST(Rnea, InertiaTimesAccelerationPlusBias) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const RandomState s = random_state(*m, 5);
+    const Eigen::MatrixXd M = crba(*m, d, s.q);
+    const Eigen::VectorXd b = bias_forces(*m, d, s.q, s.v);
+    const Eigen::VectorXd tau = rnea(*m, d, s.q, s.v, s.a);
+    EXPECT_LT((tau - (M * s.a + b)).norm(), 1e-11 * (1 + tau.norm()));
+    // gravity alone
+    const Eigen::VectorXd g = gravity_forces(*m, d, s.q);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m->nv);
+    EXPECT_LT((g - rnea(*m, d, s.q, zero, zero)).norm(), 1e-13 * (1 + g.norm()));
+  }
+}
+
+TEST(Rnea, ExternalForceMapsThroughTheTransposedJacobian) {
+  // a world force F at a point adds −Jᵀ F to the torques needed for the same motion
+  const auto m = fixtures::branching_tree();
+  Data d(*m);
+  const RandomState s = random_state(*m, 9);
+  const int link = m->link_index("hand");
+  const Vector3 p_L(0.02, -0.03, 0.01);
+  const Vector3 F_W(3, -2, 5);
+  const Vector3 N_W(0.4, 0.1, -0.3);
+  compute_joint_jacobians(*m, d, s.q);
+  FrameJacobian J(m->nv);
+  point_jacobian(*m, d, link, p_L, J);
+  std::vector<Force> f_ext(m->njoints);
+  f_ext[link] = link_force_from_world(d, link, F_W, d.X_W[link] * p_L, N_W);
+  const Eigen::VectorXd tau0 = rnea(*m, d, s.q, s.v, s.a);
+  const Eigen::VectorXd tau1 = rnea(*m, d, s.q, s.v, s.a, f_ext);
+  const Eigen::VectorXd expected = tau0 - J.linear.transpose() * F_W - J.angular.transpose() * N_W;
+  EXPECT_LT((tau1 - expected).norm(), 1e-11 * (1 + tau0.norm()));
+}
+
+TEST(Aba, InvertsRnea) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    for (std::uint64_t seed = 0; seed < 10; ++seed) {
+      const RandomState s = random_state(*m, seed);
+      std::vector<Force> f_ext(m->njoints);
+      for (int i = 1; i < m->njoints; ++i) f_ext[i] = Force{Vector3(0.1 * i, -0.2, 0.3), Vector3(1, i * 0.5, -2)};
+      const Eigen::VectorXd a = aba(*m, d, s.q, s.v, s.tau, f_ext);
+      const Eigen::VectorXd tau = rnea(*m, d, s.q, s.v, a, f_ext);
+      EXPECT_LT((tau - s.tau).norm(), 1e-10 * (1 + s.tau.norm())) << m->name << " seed " << seed;
+    }
+  }
+}
+
+TEST(Aba, EqualsInverseInertiaTimesTauMinusBias) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const RandomState s = random_state(*m, 2);
+    const Eigen::VectorXd b = bias_forces(*m, d, s.q, s.v);
+    const Eigen::MatrixXd M = crba(*m, d, s.q);
+    const Eigen::VectorXd expected = M.llt().solve(s.tau - b);
+    const Eigen::VectorXd a = aba(*m, d, s.q, s.v, s.tau);
+    EXPECT_LT((a - expected).norm(), 1e-10 * (1 + expected.norm()));
+  }
+}
+
+TEST(Ltdl, SparseSolveAgreesWithDenseCholesky) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 4));
+    factorize_mass_matrix(*m, d);
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
+    Eigen::VectorXd x = b;
+    solve_mass_matrix(*m, d, x);
+    EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm()));
+    // reconstruct H = Lᵀ D L, and L is zero off the root paths
+    Eigen::MatrixXd L = Eigen::MatrixXd::Identity(m->nv, m->nv);
+    Eigen::VectorXd D(m->nv);
+    for (int k = 0; k < m->nv; ++k) {
+      D[k] = d.LTDL(k, k);
+      for (int i = m->parent_v[k]; i >= 0; i = m->parent_v[i]) L(k, i) = d.LTDL(k, i);
+    }
+    EXPECT_LT((L.transpose() * D.asDiagonal() * L - M).norm(), 1e-12 * M.norm());
+    Eigen::MatrixXd B = Eigen::MatrixXd::Identity(m->nv, m->nv);
+    solve_mass_matrix_columns(*m, d, B);
+    EXPECT_LT((M * B - Eigen::MatrixXd::Identity(m->nv, m->nv)).norm(), 1e-10);
+  }
+}
+
+TEST(Dynamics, PerStepPathDoesNotAllocate) {
+  const auto m = fixtures::branching_tree();
+  Data d(*m);
+  const RandomState s = random_state(*m, 1);
+  Eigen::VectorXd x = s.tau;
+  fixtures::AllocationCounter allocations;
+  Eigen::internal::set_is_malloc_allowed(false);
+  rnea(*m, d, s.q, s.v, s.a);
+  crba(*m, d, s.q);
+  factorize_mass_matrix(*m, d);
+  solve_mass_matrix(*m, d, x);
+  aba(*m, d, s.q, s.v, s.tau);
+  Eigen::internal::set_is_malloc_allowed(true);
+  EXPECT_EQ(allocations.count(), 0);
+}
+
+TEST(Dynamics, LongChainsStayAccurate) {
+  // hard case #19: 512 links, forward then inverse dynamics reproduces the torques
+  const auto m = fixtures::chain(512);
+  Data d(*m);
+  const RandomState s = random_state(*m, 12);
+  const Eigen::VectorXd a = aba(*m, d, s.q, s.v, s.tau);
+  const Eigen::VectorXd tau = rnea(*m, d, s.q, s.v, a);
+  EXPECT_LT((tau - s.tau).norm() / s.tau.norm(), 1e-8);
+  // the same through CRBA and the sparse factorization
+  crba(*m, d, s.q);
+  factorize_mass_matrix(*m, d);
+  Eigen::VectorXd a2 = s.tau - bias_forces(*m, d, s.q, s.v);
+  solve_mass_matrix(*m, d, a2);
+  EXPECT_LT((rnea(*m, d, s.q, s.v, a2) - s.tau).norm() / s.tau.norm(), 1e-8);
+}
+
+}  // namespace
