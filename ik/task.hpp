@@ -1,0 +1,102 @@
+// IK tasks: value objects, each a block of rows J θ̇ = ṗ_desired with a gain and a weight
+// (Yamane §8.2, digest §2.2–2.3). Desired velocities are the feedback laws of digest §2.3.
+#pragma once
+
+#include <limits>
+#include <variant>
+
+#include "core/data.hpp"
+#include "core/jacobian.hpp"
+#include "core/model.hpp"
+
+namespace ik {
+
+using core::Quaternion;
+using core::Vector3;
+
+/// Which rows a link task constrains.
+enum class TaskMode { kPosition, kOrientation, kPose };
+const char* to_string(TaskMode m);
+
+/// "use the solver's default" for a gain
+constexpr double kDefaultGain = -1.0;
+
+/// Drag a point on a link to a world target (top priority by default). Several drags are
+/// allowed (markers as drags, Yamane ch. 10). Feedback law: ṙ = ṙ_ref + K (r_ref − r) (eq. 8.8).
+struct DragTask {
+  int link = 0;
+  Vector3 p_LinkPoint = Vector3::Zero();  // the grabbed point, link frame
+  Vector3 target_W = Vector3::Zero();
+  Quaternion target_R_W = Quaternion::Identity();  // orientation target (link frame in world)
+  Vector3 velocity_W = Vector3::Zero();            // feed-forward ṙ_ref
+  Vector3 angular_velocity_W = Vector3::Zero();    // feed-forward ω_ref
+  TaskMode mode = TaskMode::kPosition;
+  double gain = kDefaultGain;
+  double weight = 1.0;
+};
+
+/// Hold a point on a link at a target: static (eq. 8.21) or moving with feed-forward velocity
+/// (eq. 8.30, editing in motion). Any link and any number of pins.
+struct PinTask {
+  int link = 0;
+  Vector3 p_LinkPoint = Vector3::Zero();
+  Vector3 target_W = Vector3::Zero();
+  Quaternion target_R_W = Quaternion::Identity();
+  Vector3 velocity_W = Vector3::Zero();
+  Vector3 angular_velocity_W = Vector3::Zero();
+  TaskMode mode = TaskMode::kPosition;
+  double gain = kDefaultGain;
+  double weight = 1.0;
+};
+
+/// Pull a joint toward a reference: 1-DOF θ̇ = θ̇_ref + K (θ_ref − θ) (eqs. 8.22, 8.31);
+/// spherical ω = ω_ref + K log(Rᵀ R_ref) in the child frame (eqs. 8.24–8.26 with the rotation
+/// vector in place of the skew part, so a 180° error still pulls).
+struct JointReferenceTask {
+  int joint = 0;
+  double q_ref = 0;                            // 1-DOF joints
+  Quaternion R_ref = Quaternion::Identity();   // spherical joints
+  double velocity_ref = 0;                     // 1-DOF feed-forward
+  Vector3 angular_velocity_ref = Vector3::Zero();  // spherical feed-forward, child frame
+  double gain = kDefaultGain;
+  double weight = 0.1;  // references are preferences: weaker than pins (1) by default
+};
+
+/// Number of rows a task contributes.
+int task_rows(const core::Model& model, const DragTask& t);
+int task_rows(const core::Model& model, const PinTask& t);
+int task_rows(const core::Model& model, const JointReferenceTask& t);
+
+/// Task error: position (m) and orientation (rad) parts, whichever the mode has.
+struct TaskError {
+  double position = 0;
+  double orientation = 0;
+};
+
+/// Largest error the feedback term acts on in one step (the error is clamped to it).
+struct ErrorClamp {
+  double position = 0.2;     // m
+  double orientation = 1.0;  // rad
+};
+
+/// Fills the rows of J (task Jacobian, world-aligned; orientation rows before position rows)
+/// and v (desired velocity) for the current kinematics, with the feedback gain K.
+/// Requires: core::compute_joint_jacobians(model, data, q).
+void fill_link_task(const core::Model& model, const core::Data& data, int link,
+                    const Vector3& p_LinkPoint, TaskMode mode, const Vector3& target_W,
+                    const Quaternion& target_R_W, const Vector3& velocity_W,
+                    const Vector3& angular_velocity_W, double K, const ErrorClamp& clamp,
+                    core::FrameJacobian& scratch, Eigen::Ref<Eigen::MatrixXd> J,
+                    Eigen::Ref<Eigen::VectorXd> v);
+
+void fill_reference_task(const core::Model& model, const Eigen::VectorXd& q,
+                         const JointReferenceTask& t, double K, const ErrorClamp& clamp,
+                         Eigen::Ref<Eigen::MatrixXd> J, Eigen::Ref<Eigen::VectorXd> v);
+
+/// Current error of a link task. Requires: core::forward_kinematics.
+TaskError link_task_error(const core::Data& data, int link, const Vector3& p_LinkPoint,
+                          TaskMode mode, const Vector3& target_W, const Quaternion& target_R_W);
+TaskError reference_task_error(const core::Model& model, const Eigen::VectorXd& q,
+                               const JointReferenceTask& t);
+
+}  // namespace ik
