@@ -8,5 +8,7 @@ namespace cli {
 /// Each add_* registers one subcommand and its callback on the app.
 void add_info_command(CLI::App& app);
 void add_character_command(CLI::App& app);
+void add_solve_command(CLI::App& app);
+void add_dynamics_command(CLI::App& app);
 
 }  // namespace cli

@@ -8,6 +8,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   cli::add_info_command(app);
   cli::add_character_command(app);
+  cli::add_solve_command(app);
+  cli::add_dynamics_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -2,8 +2,10 @@
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(nlohmann_json 3.10 REQUIRED)
 find_package(urdfdom REQUIRED)
+find_package(tinyxml2 REQUIRED)  # URDF elements urdfdom drops
 find_package(CLI11 REQUIRED)
 find_package(Threads REQUIRED)
+find_package(assimp REQUIRED)  # skinned-character import (core/io/assimp_import), Debian 5.2.5
 
 # urdfdom's config exposes include dirs and library names as variables
 add_library(pindrag_urdfdom INTERFACE)

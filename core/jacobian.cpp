@@ -19,7 +19,8 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
     switch (model.joint_type[i]) {
       case JointType::kFixed: break;
       case JointType::kRevolute: {
-        const Vector3 w = R * model.axis[i];
+        const int k = model.axis_index[i];
+        const Vector3 w = k >= 0 ? Vector3(R.col(k)) : Vector3(R * model.axis[i]);
         J.col(c).head<3>() = w;
         J.col(c).tail<3>() = p.cross(w);
         break;

@@ -41,8 +41,18 @@ const std::vector<Transform>& forward_kinematics(const Model& model, Data& data,
                                                  const Eigen::VectorXd& q) {
   data.X_W[0] = Transform::Identity();
   for (int i = 1; i < model.njoints; ++i) {
-    data.X_P[i] = joint_transform(model, i, q);
-    data.X_W[i] = data.X_W[model.parent[i]] * data.X_P[i];
+    const Transform& X_WP = data.X_W[model.parent[i]];
+    const int k = model.axis_index[i];
+    if (model.joint_type[i] == JointType::kRevolute && k >= 0 && model.placement_is_translation[i]) {
+      // the common case: a hinge about a frame axis with an unrotated placement; rotate the
+      // parent's world axes directly instead of composing two 3×3 rotations
+      const double a = q[model.idx_q[i]];
+      data.X_P[i] = {rotate_about_axis(Matrix3::Identity(), k, a), model.X_PJ[i].p};
+      data.X_W[i] = {rotate_about_axis(X_WP.R, k, a), X_WP.R * model.X_PJ[i].p + X_WP.p};
+    } else {
+      data.X_P[i] = joint_transform(model, i, q);
+      data.X_W[i] = X_WP * data.X_P[i];
+    }
   }
   return data.X_W;
 }

@@ -76,8 +76,9 @@ bool Model::operator==(const Model& o) const {
          gravity == o.gravity && parent == o.parent && subtree_end == o.subtree_end &&
          link_name == o.link_name && joint_name == o.joint_name &&
          display_name == o.display_name && joint_type == o.joint_type && X_PJ == o.X_PJ &&
-         axis == o.axis && axis_index == o.axis_index && idx_q == o.idx_q && idx_v == o.idx_v &&
-         limits == o.limits && spherical_range == o.spherical_range &&
+         axis == o.axis && axis_index == o.axis_index &&
+         placement_is_translation == o.placement_is_translation && idx_q == o.idx_q && idx_v == o.idx_v &&
+         limits == o.limits && spherical_range == o.spherical_range && range_inner == o.range_inner &&
          ik_weight == o.ik_weight && ik_gain == o.ik_gain && inertia == o.inertia &&
          collision == o.collision && visual == o.visual && joint_of_v == o.joint_of_v &&
          parent_v == o.parent_v;

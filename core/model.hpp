@@ -71,6 +71,16 @@ struct SphericalRange {
   bool operator==(const SphericalRange& o) const;
 };
 
+/// A conservative inner region of a spherical range, derived from it: every swing with
+/// |a| <= swing_radius and twist in [twist_lower, twist_upper] is inside (used to skip the
+/// triangle search for joints well inside their ranges).
+struct RangeInnerBounds {
+  double swing_radius = -1;  // negative: no inner disk (the nominal direction is not inside)
+  double twist_lower = 0;
+  double twist_upper = -1;
+  bool operator==(const RangeInnerBounds&) const = default;
+};
+
 /// A collision or display shape attached to a link. Capsules and cylinders run along the
 /// shape frame's z axis; `length` is the distance between the capsule's end-sphere centres or
 /// the cylinder's full height; `size` holds a box's full extents. Meshes are referenced by a
@@ -111,10 +121,12 @@ struct Model {
   std::vector<Transform> X_PJ;  // joint frame in the parent link frame at the neutral configuration
   std::vector<Vector3> axis;    // unit axis in the joint frame (revolute, prismatic)
   std::vector<int> axis_index;  // 0, 1, 2 when axis is +x, +y, +z exactly, else -1 (fast paths)
+  std::vector<char> placement_is_translation;  // X_PJ.R is exactly the identity (fast paths)
   std::vector<int> idx_q;       // first configuration coordinate of each joint
   std::vector<int> idx_v;       // first velocity coordinate of each joint
   std::vector<JointLimits> limits;
   std::vector<SphericalRange> spherical_range;
+  std::vector<RangeInnerBounds> range_inner;    // derived from spherical_range
   std::vector<Quaternion> standard_orientation;  // rest orientation of spherical joints
   std::vector<double> ik_weight;                 // relative cost of moving the joint in IK
   std::vector<std::optional<double>> ik_gain;    // feedback gain (1/s); empty: solver default

@@ -1,5 +1,7 @@
 #include "core/model_builder.hpp"
 
+#include "core/swing_twist.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <sstream>
@@ -307,10 +309,12 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
   m->X_PJ.assign(nj, Transform::Identity());
   m->axis.assign(nj, Vector3::UnitZ());
   m->axis_index.assign(nj, -1);
+  m->placement_is_translation.assign(nj, 1);
   m->idx_q.assign(nj, 0);
   m->idx_v.assign(nj, 0);
   m->limits.assign(nj, JointLimits{});
   m->spherical_range.assign(nj, SphericalRange{});
+  m->range_inner.assign(nj, RangeInnerBounds{});
   m->standard_orientation.assign(nj, Quaternion::Identity());
   m->ik_weight.assign(nj, 1.0);
   m->ik_gain.assign(nj, std::nullopt);
@@ -332,6 +336,7 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
     m->display_name[i] = l.display_name;
     m->joint_type[i] = j.type;
     m->X_PJ[i] = j.X_PJ;
+    m->placement_is_translation[i] = j.X_PJ.R == Matrix3::Identity() ? 1 : 0;
     if (j.type == JointType::kRevolute || j.type == JointType::kPrismatic) {
       m->axis[i] = j.axis.normalized();
       for (int a = 0; a < 3; ++a) {
@@ -342,6 +347,7 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
     if (j.type == JointType::kSpherical) {
       m->spherical_range[i] = j.range;
       m->spherical_range[i].frame.normalize();
+      m->range_inner[i] = inner_bounds(m->spherical_range[i]);
       m->standard_orientation[i] = j.standard_orientation.normalized();
     }
     m->ik_weight[i] = j.ik_weight;

@@ -132,6 +132,57 @@ RangeStatus check_range(const SphericalRange& range, const SwingTwist& st) {
   return out;
 }
 
+RangeInnerBounds inner_bounds(const SphericalRange& range) {
+  RangeInnerBounds b;
+  if (range.empty()) return b;
+  // the nominal direction (a = 0) must be inside some triangle
+  bool origin_inside = false;
+  for (const auto& t : range.triangles) {
+    Eigen::Vector3d l;
+    origin_inside = origin_inside || barycentric(Eigen::Vector2d::Zero(), range.swing[t[0]],
+                                                 range.swing[t[1]], range.swing[t[2]], l);
+  }
+  b.twist_lower = -kInfinity;
+  b.twist_upper = kInfinity;
+  for (size_t v = 0; v < range.swing.size(); ++v) {
+    b.twist_lower = std::max(b.twist_lower, range.twist_lower[v]);
+    b.twist_upper = std::min(b.twist_upper, range.twist_upper[v]);
+  }
+  if (!origin_inside) return b;
+  // boundary edges belong to one triangle only; the disk may reach the nearest of them
+  double r = kInfinity;
+  for (size_t t = 0; t < range.triangles.size(); ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = range.triangles[t][e], c = range.triangles[t][(e + 1) % 3];
+      int uses = 0;
+      for (const auto& u : range.triangles) {
+        for (int f = 0; f < 3; ++f) {
+          const int x = u[f], y = u[(f + 1) % 3];
+          if ((x == a && y == c) || (x == c && y == a)) ++uses;
+        }
+      }
+      if (uses != 1) continue;
+      const Eigen::Vector2d& p0 = range.swing[a];
+      const Eigen::Vector2d& p1 = range.swing[c];
+      const Eigen::Vector2d d = p1 - p0;
+      const double s = std::clamp(-p0.dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+      r = std::min(r, (p0 + s * d).norm());
+    }
+  }
+  // shrink a hair so rounding at the rim never accepts a point the full test would refuse
+  b.swing_radius = std::isfinite(r) ? r * (1.0 - 1e-9) : -1;
+  return b;
+}
+
+RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st) {
+  const RangeInnerBounds& b = model.range_inner[i];
+  if (!st.singular && st.a_y * st.a_y + st.a_z * st.a_z <= b.swing_radius * b.swing_radius &&
+      b.swing_radius >= 0 && twist_excess(st.twist, b.twist_lower, b.twist_upper) == 0) {
+    return RangeStatus{};
+  }
+  return check_range(model.spherical_range[i], st);
+}
+
 SphericalRange directional_range(const std::vector<double>& psi,
                                  const std::vector<double>& swing_max,
                                  const std::vector<double>& twist_lower,

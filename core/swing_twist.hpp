@@ -43,6 +43,14 @@ struct RangeStatus {
 /// 2π, so limits may straddle ±π. An empty range accepts everything.
 RangeStatus check_range(const SphericalRange& range, const SwingTwist& st);
 
+/// The inner bounds of a range (see RangeInnerBounds): the largest disk around the nominal
+/// direction inside the triangles, and the twist interval every vertex allows.
+RangeInnerBounds inner_bounds(const SphericalRange& range);
+
+/// check_range for spherical joint i of a model, answering from the inner bounds when they
+/// suffice (the common case of a joint well inside its range).
+RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st);
+
 /// A cone of half-angle swing_max around the nominal direction with a constant twist interval,
 /// authored as a triangle fan of `segments` triangles.
 SphericalRange cone_range(double swing_max, double twist_lower, double twist_upper,

@@ -17,7 +17,7 @@ bool has_spherical_range(const core::Model& model, int i) {
 }
 
 bool spherical_in_range(const core::Model& model, int i, const core::Quaternion& r) {
-  return core::check_range(model.spherical_range[i], core::joint_swing_twist(model, i, r)).inside;
+  return core::check_joint_range(model, i, core::joint_swing_twist(model, i, r)).inside;
 }
 }  // namespace
 
@@ -90,8 +90,8 @@ double max_range_violation(const core::Model& model, const Eigen::VectorXd& q) {
       const core::JointLimits& L = model.limits[i];
       worst = std::max({worst, q[iq] - L.upper, L.lower - q[iq]});
     } else if (has_spherical_range(model, i)) {
-      const core::RangeStatus s = core::check_range(
-          model.spherical_range[i], core::joint_swing_twist(model, i, core::quaternion_at(q, iq)));
+      const core::RangeStatus s = core::check_joint_range(
+          model, i, core::joint_swing_twist(model, i, core::quaternion_at(q, iq)));
       worst = std::max(worst, s.violation);
     }
   }

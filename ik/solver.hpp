@@ -2,9 +2,12 @@
 //
 // Top level: the drag rows J1 θ̇ = v1, solved exactly with the (joint-weighted) pseudoinverse;
 // damped only along directions where J1 loses rank (fixed root, stretched limb).
-// Lower level: pins, references and range rows J2 θ̇ = v2, solved with the SR inverse in the
-// null space of the top: y = (J2 W)* (v2 − J2 θ̇0), θ̇ = θ̇0 + W y, with the projector
-// W = E − J1⁺ J1 applied implicitly (never an N×N matrix).
+// Range level: rows for joints at or beyond their ranges (ik/limits.hpp), solved in the null
+// space of the top. The book puts them on the lower level; above the pins, a pinned link gives
+// way before a joint leaves its range, and a weight never has to outshout the pins.
+// Lower level: pins and references J2 θ̇ = v2, solved with the SR inverse in the null space of
+// both: y = (J2 W)* (v2 − J2 θ̇0), θ̇ = θ̇0 + W y, with the projectors applied implicitly
+// (never an N×N matrix).
 // Joint velocities are integrated on the configuration manifold (core::integrate).
 #pragma once
 
@@ -25,7 +28,10 @@ namespace ik {
 // with explicit integration the error shrinks by (1 − K h) per step, so K h ≤ 1 (digest §2.3).
 constexpr double kDefaultTimeStep = 1.0 / 60.0;
 constexpr int kDefaultIterations = 1;
-constexpr double kDefaultDamping = 1e-3;         // SR inverse k of the lower level
+constexpr double kDefaultDamping = 3e-2;         // SR inverse k of the lower level (see docs/ik.md)
+constexpr double kResidualDampingSpeed = 1.0;    // m/s or rad/s: residual at which k reaches its
+                                                 // full value under DampingSchedule::kResidual
+constexpr double kMinimumDamping = 1e-6;         // floor of the scheduled damping
 constexpr double kDefaultTopDamping = 1e-3;      // top-level damping where J1 loses rank
 constexpr double kDefaultTopSingularValue = 1e-2;  // singular values below this get damped
 constexpr double kDefaultManipulabilityThreshold = 1e-2;  // w0 for the scheduled damping
@@ -34,10 +40,13 @@ constexpr double kDefaultPinGain = 40.0;
 constexpr double kDefaultReferenceGain = 2.0;
 constexpr double kDefaultLimitGain = 20.0;
 constexpr double kDefaultRangeGain = 20.0;
-constexpr double kDefaultRangeWeight = 100.0;    // range rows outweigh pins (1) on the lower level
-constexpr double kDefaultMaxPositionError = 0.2;   // m, feedback error clamp per step
+constexpr double kDefaultRangeDamping = 1e-3;    // range level SR k: bounded where it conflicts with the drag
+constexpr double kDefaultMaxPositionError = 0.1;   // m, feedback error clamp per step
 constexpr double kDefaultMaxOrientationError = 1.0;  // rad
 constexpr double kDefaultLimitMargin = 1e-3;     // rad or m inside a limit where a joint stops
+constexpr double kDefaultMaxJointStep = 0.2;     // rad or m: largest change of a coordinate per
+                                                 // iteration; larger steps are scaled down whole
+constexpr int kMaxRangeRounds = 4;              // active-set rounds of range rows per iteration
 constexpr double kSatisfiedPosition = 1e-3;      // m: a task within this is "satisfied"
 constexpr double kSatisfiedOrientation = 1e-2;   // rad
 
@@ -45,7 +54,7 @@ struct SolverSettings {
   double dt = kDefaultTimeStep;  // frame time; each of the iterations integrates dt / iterations
   int iterations = kDefaultIterations;
   double damping = kDefaultDamping;
-  DampingSchedule damping_schedule = DampingSchedule::kConstant;
+  DampingSchedule damping_schedule = DampingSchedule::kResidual;
   double manipulability_threshold = kDefaultManipulabilityThreshold;
   double top_damping = kDefaultTopDamping;
   double top_singular_value = kDefaultTopSingularValue;
@@ -54,10 +63,11 @@ struct SolverSettings {
   double reference_gain = kDefaultReferenceGain;
   double limit_gain = kDefaultLimitGain;
   double range_gain = kDefaultRangeGain;
-  double range_weight = kDefaultRangeWeight;
+  double range_damping = kDefaultRangeDamping;
   double max_position_error = kDefaultMaxPositionError;
   double max_orientation_error = kDefaultMaxOrientationError;
   double limit_margin = kDefaultLimitMargin;
+  double max_joint_step = kDefaultMaxJointStep;
   bool use_joint_weights = true;  // scale joints by the model's ik_weight
 };
 
@@ -75,6 +85,10 @@ struct TaskReport {
 };
 
 struct Report {
+  /// kRejected: the problem was invalid (message says why) and q was left untouched
+  enum class Status { kOk, kRejected };
+  Status status = Status::kOk;
+  std::string message;
   std::vector<TaskReport> tasks;
   int top_rows = 0;
   int lower_rows = 0;
@@ -83,8 +97,13 @@ struct Report {
   int range_rows = 0;        // rows added for joints at or beyond their ranges (last iteration)
   int iterations = 0;
   double max_joint_speed = 0;  // max |θ̇| over the frame (rad/s or m/s)
+  bool step_limited = false;   // an iteration's step was scaled down to max_joint_step
   double limit_violation = 0;  // after the step (rad or m)
   double lower_damping = 0;    // SR k used (last iteration)
+  // the lower-level solve of the last iteration in weight-scaled coordinates: |y| and |Δṗ|;
+  // the SR inverse guarantees |y| <= |Δṗ| / (2√k) (Yamane §8.2.3)
+  double lower_solution_norm = 0;
+  double lower_rhs_norm = 0;
   double microseconds = 0;     // wall time of the step
 };
 
@@ -94,6 +113,8 @@ class Solver {
 
   /// Advances q by one frame: `settings.iterations` linearize–solve–integrate steps of
   /// dt / iterations each. q is updated in place; data holds the final kinematics.
+  /// A problem with a bad link or joint index, or a non-finite target or gain, is rejected:
+  /// report().status is kRejected with a message naming the task, and q is not touched.
   /// Allocation-free once the workspace has seen a problem of this size.
   const Report& step(const Problem& problem, core::Data& data, Eigen::VectorXd& q);
 
@@ -104,9 +125,12 @@ class Solver {
   const Eigen::VectorXd& velocity() const { return qdot_; }
 
  private:
+  /// Empty when every task is usable, else a message naming the first bad one.
+  std::string check_problem(const Problem& problem, const Eigen::VectorXd& q) const;
   void fill_rows(const Problem& problem, const core::Data& data, const Eigen::VectorXd& q);
-  void append_range_rows(size_t first);
-  void solve_levels();
+  void append_range_rows(size_t first);  // range_rows_[first..] into the range level
+  void solve_levels(bool first_round);
+  void limit_step(double h);
   void fill_report(const Problem& problem, const core::Data& data, const Eigen::VectorXd& q);
 
   const core::Model& model_;
@@ -118,9 +142,22 @@ class Solver {
   int m1_ = 0, m2_ = 0;
   // top-level factors
   Eigen::MatrixXd J1s_, J2s_;  // rows and columns scaled by the weights
-  Eigen::MatrixXd G_, E_, P_, JJ_, S_;
-  Eigen::VectorXd t1_, x0_, dp_, y_, qdot_, scaled_;
-  SrInverse sr_;
+  Eigen::MatrixXd G_, E_, Ginv_;  // top level: Cholesky factor of G, or the damped inverse
+  bool top_is_cholesky_ = true;
+  Eigen::VectorXd w_;
+  // range level: selected coordinate and desired velocity per row, projected rows and factors
+  int mR_ = 0;
+  std::vector<int> range_coord_;
+  Eigen::VectorXd vR_;
+  Eigen::MatrixXd SR_, PR_, GR_;
+  Eigen::VectorXd t_, dp_, y_, qdot_, scaled_;
+  Eigen::VectorXd x_top_, x_range_, x_lower_;  // each level's contribution, weight-scaled
+  // lower level through its normal equations (tree-sparse) and the constraint Schur complement
+  std::vector<std::vector<int>> link_support_;  // coordinates on each link's root path
+  std::vector<int> row_support_;  // per lower row: link (>= 0) or −1 − coordinate
+  Eigen::MatrixXd A_, Y_, Sc_, pivots_;
+  Eigen::VectorXd b_, ltdl_half_rhs_;
+  int y_columns_ = 0;  // columns of Y valid for the current factorization
   core::FrameJacobian point_;
   std::vector<RangeRow> range_rows_;
   std::vector<char> range_flags_;

@@ -1,8 +1,25 @@
 #include "ik/sr_inverse.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ik {
+
+const char* to_string(DampingSchedule s) {
+  switch (s) {
+    case DampingSchedule::kConstant: return "constant";
+    case DampingSchedule::kManipulability: return "manipulability";
+    case DampingSchedule::kResidual: return "residual";
+  }
+  return "?";
+}
+
+std::optional<DampingSchedule> damping_schedule_from_string(std::string_view s) {
+  for (DampingSchedule d : {DampingSchedule::kConstant, DampingSchedule::kManipulability, DampingSchedule::kResidual}) {
+    if (s == to_string(d)) return d;
+  }
+  return std::nullopt;
+}
 
 SrInverse::Result SrInverse::solve(const Eigen::Ref<const Eigen::MatrixXd>& A,
                                    const Eigen::Ref<const Eigen::VectorXd>& b, double damping,
@@ -27,7 +44,9 @@ SrInverse::Result SrInverse::solve(const Eigen::Ref<const Eigen::MatrixXd>& A,
     G.selfadjointView<Eigen::Lower>().rankUpdate(A.transpose());
   }
   double k = damping;
-  if (schedule == DampingSchedule::kManipulability) {
+  if (schedule == DampingSchedule::kResidual) {
+    k = std::max(1e-12, damping * std::min(1.0, b.squaredNorm() / (threshold * threshold)));
+  } else if (schedule == DampingSchedule::kManipulability) {
     // w from a lightly regularized factorization; damping grows as w falls below w0
     // w from the Cholesky diagonal of a copy (lower triangle only), damping grows below w0
     constexpr double kFloor = 1e-12;

@@ -23,7 +23,8 @@ struct LoadResult {
   std::vector<std::string> warnings;
 };
 
-/// Loads a character by extension: .urdf (core/io/urdf.hpp) or .json (core/io/character_json.hpp).
+/// Loads a character by extension: .urdf (core/io/urdf.hpp) or .json (core/io/character_json.hpp;
+/// the file says how its root attaches, so `options` applies to URDF only).
 /// @throws ModelError naming the file (and line or field) and the rule broken
 LoadResult load_model_file(const std::string& path, const LoadOptions& options = {});
 

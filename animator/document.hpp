@@ -1,0 +1,32 @@
+// The document of a session: everything an edit can change, what undo restores and what a saved
+// session holds. Copies are cheap: clips and layers are shared, immutable.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "animator/edit_layer.hpp"
+#include "animator/keyframes.hpp"
+#include "animator/pin.hpp"
+#include "animator/scene.hpp"
+#include "core/clip.hpp"
+#include "ik/solver.hpp"
+
+namespace animator {
+
+/// Seconds over which an edit made during playback fades in and out.
+constexpr double kDefaultEditFalloff = 0.5;
+
+struct Document {
+  Eigen::VectorXd q;
+  std::vector<Pin> pins;
+  KeyTrack keys;
+  std::shared_ptr<const core::Clip> clip;
+  LayerStack layers;
+  ik::SolverSettings settings;
+  Scene scene;
+  double edit_falloff = kDefaultEditFalloff;
+};
+
+}  // namespace animator

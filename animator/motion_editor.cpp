@@ -1,0 +1,118 @@
+#include "animator/motion_editor.hpp"
+
+#include <algorithm>
+
+#include "core/configuration.hpp"
+#include "core/jacobian.hpp"
+#include "core/kinematics.hpp"
+
+namespace animator {
+
+namespace {
+// weight of the rows that pull every joint back onto the clip: far below the pins (1), so a pin
+// stays within a millimetre when the drag makes them disagree
+constexpr double kReferenceWeight = 1e-4;
+}  // namespace
+
+ik::SolverSettings motion_edit_settings(double frame_time) {
+  ik::SolverSettings s;
+  s.dt = frame_time;
+  s.iterations = 3;
+  // K h = 1 for each of the iterations: every iteration is a full Gauss–Newton step toward this
+  // frame's targets, so the pins land on the clip's trajectory instead of lagging behind it (the
+  // target's motion over the frame enters through the error; a separate feed-forward term would
+  // count it twice)
+  const double full = s.iterations / frame_time;
+  s.pin_gain = full;
+  s.reference_gain = full;
+  s.drag_gain = full;
+  s.max_joint_step = 0.5;
+  // the targets move smoothly and stay reachable, so a light damping keeps pins within a
+  // millimetre (the posing default trades that accuracy for calm behaviour at unreachable drags)
+  s.damping = 1e-3;
+  return s;
+}
+
+MotionEditor::MotionEditor(const core::Model& model, const ik::SolverSettings& settings)
+    : model_(model), solver_(model, settings), data_(model), ref_data_(model) {}
+
+void MotionEditor::begin(const core::Clip& base, const LayerStack& layers, int frame) {
+  recorded_.clear();
+  layered_frame(model_, base, layers, frame, q_);
+}
+
+const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base, const LayerStack& layers,
+                                          int frame, const std::vector<Pin>& pins,
+                                          const std::optional<ik::DragTask>& drag) {
+  // the reference: this frame of the layered clip. The solve starts from the clip frame carrying
+  // the previous frame's displacement, so joints the pins and the drag do not need keep moving
+  // with the clip, and the damping resists changes of the edit rather than the clip's motion.
+  layered_frame(model_, base, layers, frame, q_ref_);
+  core::forward_kinematics(model_, ref_data_, q_ref_);
+  if (recorded_.empty()) {
+    q_ = q_ref_;
+  } else {
+    core::integrate(model_, q_ref_, recorded_.rbegin()->second, 1.0, q_);
+  }
+
+  problem_.clear();
+  // moving pins: the pinned points follow the clip (eq. 8.30 with the full-gain feedback above)
+  for (const Pin& p : pins) {
+    problem_.add(ik::PinTask{.link = p.link,
+                             .p_LinkPoint = p.p_LinkPoint,
+                             .target_W = ref_data_.X_W[p.link] * p.p_LinkPoint,
+                             .target_R_W = core::Quaternion(ref_data_.X_W[p.link].R),
+                             .mode = p.mode});
+  }
+  // every joint follows the clip weakly (8.31), so only what the drag and pins need changes
+  for (int j = 1; j < model_.njoints; ++j) {
+    const core::JointType t = model_.joint_type[j];
+    if (t != core::JointType::kRevolute && t != core::JointType::kPrismatic &&
+        t != core::JointType::kSpherical) {
+      continue;
+    }
+    ik::JointReferenceTask r{.joint = j, .weight = kReferenceWeight};
+    const int iq = model_.idx_q[j];
+    if (t == core::JointType::kSpherical) {
+      r.R_ref = core::quaternion_at(q_ref_, iq);
+    } else {
+      r.q_ref = q_ref_[iq];
+    }
+    problem_.add(r);
+  }
+  if (drag) problem_.add(*drag);
+  problem_.enforce_ranges = false;  // captured motion is kept as captured outside the edit
+  solver_.step(problem_, data_, q_);
+  // the edited frame, as a displacement over the layered clip
+  Eigen::VectorXd delta(model_.nv);
+  core::difference(model_, q_ref_, q_, delta);
+  recorded_[frame] = std::move(delta);
+  return q_;
+}
+
+std::shared_ptr<const EditLayer> MotionEditor::finish(const std::string& name, double falloff) {
+  if (recorded_.empty()) return nullptr;
+  auto layer = std::make_shared<EditLayer>();
+  layer->name = name;
+  layer->falloff = falloff;
+  layer->first_frame = recorded_.begin()->first;
+  const int last = recorded_.rbegin()->first;
+  layer->displacement.resize(last - layer->first_frame + 1);
+  // frames skipped between recorded ones get the linear blend of their neighbours
+  auto next = recorded_.begin();
+  for (int f = layer->first_frame; f <= last; ++f) {
+    while (next != recorded_.end() && next->first < f) ++next;
+    if (next != recorded_.end() && next->first == f) {
+      layer->displacement[f - layer->first_frame] = next->second;
+      continue;
+    }
+    const auto after = next;
+    const auto before = std::prev(next);
+    const double s = double(f - before->first) / double(after->first - before->first);
+    layer->displacement[f - layer->first_frame] = (1 - s) * before->second + s * after->second;
+  }
+  recorded_.clear();
+  return layer;
+}
+
+}  // namespace animator

@@ -1,0 +1,493 @@
+#include "animator/session.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/configuration.hpp"
+#include "core/kinematics.hpp"
+
+namespace animator {
+
+namespace {
+
+// an id shared by the consecutive commands of one gesture, so they merge into one undo entry
+constexpr int kMovePinGesture = 1 << 30;
+
+bool finite(const core::Vector3& v) { return v.allFinite(); }
+
+}  // namespace
+
+Session::Session(std::shared_ptr<const core::Model> model, std::string character)
+    : model_(std::move(model)), character_(std::move(character)), data_(*model_) {
+  doc_.q = core::neutral_configuration(*model_);
+  solver_ = std::make_unique<ik::Solver>(*model_, doc_.settings);
+  refresh_kinematics();
+}
+
+void Session::check_link(int link, const char* field) const {
+  if (link < 1 || link >= model_->njoints) {
+    throw SessionError(std::string(field) + ": link index " + std::to_string(link) +
+                       " is out of range (the character has links 1.." +
+                       std::to_string(model_->njoints - 1) + ")");
+  }
+}
+
+void Session::refresh_kinematics() { core::forward_kinematics(*model_, data_, doc_.q); }
+
+void Session::commit(const Document& before, const std::string& label) {
+  // each edit gets its own gesture id, so the settling that follows can be folded into it
+  last_gesture_ = ++gesture_counter_;
+  history_.record(std::make_unique<DocumentChange>(before, doc_, label, last_gesture_));
+}
+
+void Session::apply_document(const Document& doc) {
+  doc_ = doc;
+  solver_->set_settings(doc_.settings);
+  settling_ = false;
+  refresh_kinematics();
+}
+
+void Session::restore(Document doc, const Playback& playback) {
+  if (const std::string e = core::check_configuration(*model_, doc.q); !e.empty()) {
+    throw SessionError("pose: " + e);
+  }
+  drag_.reset();
+  motion_editor_.reset();
+  recording_.reset();
+  apply_document(doc);
+  playback_ = playback;
+  history_.clear();
+}
+
+// --- pose ------------------------------------------------------------------------------------
+
+void Session::set_pose(const Eigen::VectorXd& q) {
+  if (const std::string e = core::check_configuration(*model_, q, 1e-6); !e.empty()) {
+    throw SessionError("pose: " + e);
+  }
+  const Document before = doc_;
+  doc_.q = q;
+  refresh_kinematics();
+  commit(before, "set pose");
+}
+
+// --- dragging ----------------------------------------------------------------------------------
+
+void Session::drag_begin(int link, const core::Vector3& target_W, const core::Vector3& p_LinkPoint) {
+  check_link(link, "drag_begin.link");
+  if (!finite(target_W)) throw SessionError("drag_begin.target: must be 3 finite numbers");
+  if (!finite(p_LinkPoint)) throw SessionError("drag_begin.point: must be 3 finite numbers");
+  if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
+  gesture_before_ = doc_;
+  drag_ = Drag{link, p_LinkPoint, target_W, std::nullopt, target_W};
+  if (playback_.playing && doc_.clip && doc_.clip->size() > 1) start_motion_edit();
+  settling_ = true;
+}
+
+void Session::drag_move(const core::Vector3& target_W, const std::optional<core::Quaternion>& rotation) {
+  if (!drag_) throw SessionError("drag_move: no drag in progress (send drag_begin first)");
+  if (!finite(target_W)) throw SessionError("drag_move.target: must be 3 finite numbers");
+  if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
+    throw SessionError("drag_move.rotation: must be a unit quaternion [w, x, y, z]");
+  }
+  drag_->target_W = target_W;
+  if (rotation) drag_->rotation = rotation->normalized();
+}
+
+void Session::drag_end() {
+  if (!drag_) return;
+  if (motion_editor_) finish_motion_edit();
+  drag_.reset();
+  if (gesture_before_) {
+    commit(*gesture_before_, "drag");
+    gesture_before_.reset();
+  }
+  settling_ = true;  // pins pulled away by the drag recover through their feedback
+}
+
+std::optional<int> Session::dragged_link() const {
+  if (!drag_) return std::nullopt;
+  return drag_->link;
+}
+
+// --- pins ----------------------------------------------------------------------------------------
+
+void Session::pin(int link, ik::TaskMode mode, const core::Vector3& p_LinkPoint) {
+  check_link(link, "pin.link");
+  if (!finite(p_LinkPoint)) throw SessionError("pin.point: must be 3 finite numbers");
+  const Document before = doc_;
+  std::erase_if(doc_.pins, [&](const Pin& p) { return p.link == link; });
+  doc_.pins.push_back(Pin{link, mode, p_LinkPoint, data_.X_W[link] * p_LinkPoint,
+                          core::Quaternion(data_.X_W[link].R)});
+  commit(before, "pin " + model_->link_name[link]);
+}
+
+void Session::unpin(int link) {
+  check_link(link, "unpin.link");
+  const Document before = doc_;
+  if (std::erase_if(doc_.pins, [&](const Pin& p) { return p.link == link; }) == 0) {
+    throw SessionError("unpin.link: link '" + model_->link_name[link] + "' is not pinned");
+  }
+  commit(before, "unpin " + model_->link_name[link]);
+}
+
+void Session::move_pin(int link, const core::Vector3& target_W,
+                       const std::optional<core::Quaternion>& rotation) {
+  check_link(link, "move_pin.link");
+  if (!finite(target_W)) throw SessionError("move_pin.target: must be 3 finite numbers");
+  if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
+    throw SessionError("move_pin.rotation: must be a unit quaternion [w, x, y, z]");
+  }
+  const auto it = std::find_if(doc_.pins.begin(), doc_.pins.end(), [&](const Pin& p) { return p.link == link; });
+  if (it == doc_.pins.end()) {
+    throw SessionError("move_pin.link: link '" + model_->link_name[link] + "' is not pinned");
+  }
+  const Document before = doc_;
+  auto& pin = doc_.pins[it - doc_.pins.begin()];
+  pin.target_W = target_W;
+  if (rotation) pin.target_R_W = rotation->normalized();
+  // consecutive moves of one pin are one gesture, one undo entry
+  // consecutive moves of one pin share an id and merge
+  if (last_gesture_ != kMovePinGesture + link) last_gesture_ = kMovePinGesture + link;
+  history_.record(std::make_unique<DocumentChange>(before, doc_, "move pin " + model_->link_name[link],
+                                                   last_gesture_));
+  settling_ = true;
+}
+
+// --- settings ------------------------------------------------------------------------------------
+
+void Session::set_solver_settings(const ik::SolverSettings& s) {
+  if (const std::string e = ik::validate(s); !e.empty()) throw SessionError("settings: " + e);
+  const Document before = doc_;
+  doc_.settings = s;
+  solver_->set_settings(s);
+  commit(before, "settings");
+  settling_ = true;
+}
+
+void Session::set_scene(const Scene& scene) {
+  const Document before = doc_;
+  doc_.scene = scene;
+  commit(before, "scene effects");
+}
+
+void Session::set_edit_falloff(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0 || seconds > 60) {
+    throw SessionError("edit_falloff: must be in [0, 60] seconds");
+  }
+  const Document before = doc_;
+  doc_.edit_falloff = seconds;
+  commit(before, "edit falloff");
+}
+
+// --- keyframes -----------------------------------------------------------------------------------
+
+int Session::key_insert(std::optional<double> time, Interpolation interpolation) {
+  const double t = time.value_or(playback_.time);
+  if (!std::isfinite(t) || t < 0) throw SessionError("key_insert.time: must be a finite time >= 0");
+  const Document before = doc_;
+  const int index = doc_.keys.insert(Keyframe{t, doc_.q, interpolation});
+  commit(before, "insert key");
+  return index;
+}
+
+void Session::key_delete(int index) {
+  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
+    throw SessionError("key_delete.index: no key " + std::to_string(index));
+  }
+  const Document before = doc_;
+  doc_.keys.remove(index);
+  commit(before, "delete key");
+}
+
+int Session::key_move(int index, double time) {
+  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
+    throw SessionError("key_move.index: no key " + std::to_string(index));
+  }
+  if (!std::isfinite(time) || time < 0) throw SessionError("key_move.time: must be a finite time >= 0");
+  const Document before = doc_;
+  const int moved = doc_.keys.move(index, time);
+  commit(before, "move key");
+  return moved;
+}
+
+void Session::key_set_interpolation(int index, Interpolation interpolation) {
+  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
+    throw SessionError("key_set_interpolation.index: no key " + std::to_string(index));
+  }
+  const Document before = doc_;
+  Keyframe k = doc_.keys.keys()[index];
+  k.interpolation = interpolation;
+  doc_.keys.insert(std::move(k));
+  commit(before, "key interpolation");
+}
+
+void Session::bake_keys(double rate) {
+  if (doc_.keys.empty()) throw SessionError("bake_keys: there are no keys");
+  if (!std::isfinite(rate) || rate <= 0 || rate > 1000) throw SessionError("bake_keys.rate: must be in (0, 1000]");
+  core::Clip clip;
+  clip.frame_time = 1.0 / rate;
+  const int n = static_cast<int>(std::floor(doc_.keys.duration() * rate + 1e-9)) + 1;
+  clip.frames.resize(n);
+  for (int f = 0; f < n; ++f) doc_.keys.sample(*model_, f / rate, clip.frames[f]);
+  set_clip(std::move(clip), "bake keys");
+}
+
+// --- clips and layers ----------------------------------------------------------------------------
+
+void Session::set_clip(core::Clip clip, const std::string& label) {
+  if (const std::string e = core::check_clip(*model_, clip); !e.empty()) throw SessionError("clip: " + e);
+  if (clip.empty()) throw SessionError("clip: has no frames");
+  const Document before = doc_;
+  doc_.clip = std::make_shared<const core::Clip>(std::move(clip));
+  doc_.layers.clear();
+  playback_.time = std::clamp(playback_.time, 0.0, doc_.clip->duration());
+  show_animation_at(playback_.time);
+  commit(before, label);
+}
+
+namespace {
+void check_layer(const LayerStack& layers, int index, const char* field) {
+  if (index < 0 || index >= static_cast<int>(layers.size())) {
+    throw SessionError(std::string(field) + ": no layer " + std::to_string(index));
+  }
+}
+}  // namespace
+
+void Session::set_layer_muted(int index, bool muted) {
+  check_layer(doc_.layers, index, "layer.index");
+  const Document before = doc_;
+  auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
+  copy->muted = muted;
+  doc_.layers[index] = copy;
+  show_animation_at(playback_.time);
+  commit(before, muted ? "mute layer" : "unmute layer");
+}
+
+void Session::set_layer_weight(int index, double weight) {
+  check_layer(doc_.layers, index, "layer.index");
+  if (!std::isfinite(weight) || weight < 0 || weight > 10) throw SessionError("layer.weight: must be in [0, 10]");
+  const Document before = doc_;
+  auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
+  copy->weight = weight;
+  doc_.layers[index] = copy;
+  show_animation_at(playback_.time);
+  commit(before, "layer weight");
+}
+
+void Session::remove_layer(int index) {
+  check_layer(doc_.layers, index, "layer.index");
+  const Document before = doc_;
+  doc_.layers.erase(doc_.layers.begin() + index);
+  show_animation_at(playback_.time);
+  commit(before, "remove layer");
+}
+
+void Session::bake_layers() {
+  if (!doc_.clip) throw SessionError("bake_layers: there is no clip");
+  const Document before = doc_;
+  doc_.clip = std::make_shared<const core::Clip>(bake(*model_, *doc_.clip, doc_.layers));
+  doc_.layers.clear();
+  commit(before, "bake layers");
+}
+
+core::Clip Session::animation_clip() const {
+  if (doc_.clip) return bake(*model_, *doc_.clip, doc_.layers);
+  core::Clip out;
+  out.frame_time = 1.0 / kDefaultClipRate;
+  if (doc_.keys.empty()) {
+    out.frames.push_back(doc_.q);
+    return out;
+  }
+  const int n = static_cast<int>(std::floor(doc_.keys.duration() * kDefaultClipRate + 1e-9)) + 1;
+  out.frames.resize(n);
+  for (int f = 0; f < n; ++f) doc_.keys.sample(*model_, f / kDefaultClipRate, out.frames[f]);
+  return out;
+}
+
+double Session::duration() const {
+  if (doc_.clip) return doc_.clip->duration();
+  return doc_.keys.duration();
+}
+
+// --- playback and recording ----------------------------------------------------------------------
+
+void Session::play() { playback_.playing = true; }
+
+void Session::pause() {
+  if (motion_editor_) finish_motion_edit();
+  playback_.playing = false;
+}
+
+void Session::seek(double time) {
+  if (!std::isfinite(time)) throw SessionError("seek.time: must be a finite number");
+  if (motion_editor_) finish_motion_edit();
+  playback_.time = std::clamp(time, 0.0, std::max(0.0, duration()));
+  if (!drag_) show_animation_at(playback_.time);
+}
+
+void Session::set_loop(bool loop, double start, double end) {
+  if (!std::isfinite(start) || !std::isfinite(end) || start < 0 || (end >= 0 && end < start)) {
+    throw SessionError("loop: needs 0 <= start <= end (end < 0: the end of the animation)");
+  }
+  playback_.loop = loop;
+  playback_.loop_start = start;
+  playback_.loop_end = end;
+}
+
+void Session::set_speed(double speed) {
+  if (!std::isfinite(speed) || std::abs(speed) > 100) throw SessionError("speed: must be in [-100, 100]");
+  playback_.speed = speed;
+}
+
+void Session::record(bool on) {
+  if (on == recording_.has_value()) return;
+  if (on) {
+    recording_ = core::Clip{};
+    recording_->frame_time = 1.0 / kDefaultClipRate;
+    recording_->frames.push_back(doc_.q);
+    record_clock_ = 0;
+    return;
+  }
+  core::Clip clip = std::move(*recording_);
+  recording_.reset();
+  if (clip.size() >= 2) set_clip(std::move(clip), "record");
+}
+
+void Session::show_animation_at(double t) {
+  if (doc_.clip) {
+    sample_layered(*model_, *doc_.clip, doc_.layers, t, doc_.q);
+  } else if (!doc_.keys.empty()) {
+    doc_.keys.sample(*model_, t, doc_.q);
+  } else {
+    return;
+  }
+  refresh_kinematics();
+}
+
+// --- editing in motion ---------------------------------------------------------------------------
+
+void Session::start_motion_edit() {
+  ik::SolverSettings s = motion_edit_settings(doc_.clip->frame_time);
+  motion_editor_.emplace(*model_, s);
+  motion_edit_frame_ = std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
+                                  doc_.clip->size() - 1);
+  motion_editor_->begin(*doc_.clip, doc_.layers, motion_edit_frame_);
+}
+
+void Session::finish_motion_edit() {
+  if (!motion_editor_) return;
+  auto layer = motion_editor_->finish("edit " + std::to_string(++edit_counter_), doc_.edit_falloff);
+  motion_editor_.reset();
+  motion_edit_frame_ = -1;
+  if (layer) doc_.layers.push_back(layer);
+  show_animation_at(playback_.time);
+}
+
+// --- time ------------------------------------------------------------------------------------------
+
+bool Session::needs_tick() const { return playback_.playing || drag_.has_value() || settling_; }
+
+void Session::rebuild_problem() {
+  problem_.clear();
+  for (const Pin& p : doc_.pins) {
+    problem_.add(ik::PinTask{.link = p.link, .p_LinkPoint = p.p_LinkPoint, .target_W = p.target_W,
+                             .target_R_W = p.target_R_W, .mode = p.mode});
+  }
+  if (drag_) {
+    ik::DragTask d{.link = drag_->link, .p_LinkPoint = drag_->p_LinkPoint, .target_W = drag_->target_W};
+    // feed-forward: the target's motion since the last step (Yamane eq. 8.8)
+    d.velocity_W = (drag_->target_W - drag_->previous_target_W) / doc_.settings.dt;
+    if (drag_->rotation) {
+      d.target_R_W = *drag_->rotation;
+      d.mode = ik::TaskMode::kPose;
+    }
+    problem_.add(d);
+  }
+}
+
+bool Session::solve_step() {
+  rebuild_problem();
+  if (!problem_.active()) {
+    settling_ = false;
+    return false;
+  }
+  const ik::Report& r = solver_->step(problem_, data_, doc_.q);
+  if (drag_) drag_->previous_target_W = drag_->target_W;
+  // keep ticking while anything still moves noticeably (pins recovering after a drag)
+  constexpr double kRestSpeed = 1e-3;  // rad/s: under 2e-5 rad per frame, invisible
+  settling_ = drag_.has_value() || r.max_joint_speed > kRestSpeed;
+  return true;
+}
+
+Session::TickResult Session::tick(double dt) {
+  TickResult result;
+  if (!std::isfinite(dt) || dt < 0) dt = 0;
+  const double length = duration();
+  if (playback_.playing && length > 0) {
+    double t = playback_.time + dt * playback_.speed;
+    const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
+    const double end = playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
+    if (playback_.loop && end > start) {
+      if (t > end || t < start) t = start + std::fmod(std::fmod(t - start, end - start) + (end - start), end - start);
+    } else if (t > length || t < 0) {
+      t = std::clamp(t, 0.0, length);
+      playback_.playing = false;
+    }
+    playback_.time = t;
+    if (motion_editor_ && drag_) {
+      // editing in motion: solve every clip frame the clock passed since the last tick
+      const int frame = std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
+                                   doc_.clip->size() - 1);
+      if (frame < motion_edit_frame_) {
+        // the clock wrapped: keep what was edited as a layer, start a new edit here
+        finish_motion_edit();
+        start_motion_edit();
+      }
+      ik::DragTask d{.link = drag_->link, .p_LinkPoint = drag_->p_LinkPoint, .target_W = drag_->target_W};
+      if (drag_->rotation) {
+        d.target_R_W = *drag_->rotation;
+        d.mode = ik::TaskMode::kPose;
+      }
+      for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
+        motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
+      }
+      if (frame > motion_edit_frame_) motion_edit_frame_ = frame;
+      doc_.q = motion_editor_->pose();
+      refresh_kinematics();
+      result.report = &motion_editor_->report();
+    } else {
+      show_animation_at(t);
+    }
+    result.pose_changed = true;
+  } else if (drag_ || settling_) {
+    if (solve_step()) {
+      result.report = &solver_->report();
+      result.pose_changed = true;
+      // the figure settling after an edit is part of that edit's undo entry
+      if (!drag_) history_.amend(last_gesture_, doc_);
+    }
+  }
+  if (recording_) {
+    record_clock_ += dt;
+    while (record_clock_ >= recording_->frame_time) {
+      recording_->frames.push_back(doc_.q);
+      record_clock_ -= recording_->frame_time;
+    }
+  }
+  return result;
+}
+
+// --- undo ------------------------------------------------------------------------------------------
+
+bool Session::undo() {
+  if (drag_) drag_end();
+  return history_.undo(*this);
+}
+
+bool Session::redo() {
+  if (drag_) drag_end();
+  return history_.redo(*this);
+}
+
+}  // namespace animator

@@ -1,0 +1,207 @@
+// Session: one character being animated — its model, pose, pins, drag, solver settings, scene
+// effects, base clip, edit layers, keyframes, playback clock, recorder and undo history.
+//
+// Thread contract: a Session is driven from one thread at a time (the server gives each its own
+// actor); sessions share nothing but the immutable Model, so they need no locks.
+//
+// Edits are intents: the caller says what the user did (drag here, pin that, insert a key) and
+// the session decides what changes. Every gesture (drag begin to end), pin change, key edit and
+// clip edit is one undo entry.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "animator/document.hpp"
+#include "animator/edit_layer.hpp"
+#include "animator/history.hpp"
+#include "animator/keyframes.hpp"
+#include "animator/motion_editor.hpp"
+#include "animator/pin.hpp"
+#include "animator/scene.hpp"
+#include "core/clip.hpp"
+#include "core/data.hpp"
+#include "core/model.hpp"
+#include "core/skin.hpp"
+#include "ik/solver.hpp"
+
+namespace animator {
+
+/// A request the session cannot carry out (unknown link, bad number, nothing to undo is not an
+/// error). what() names the field and the rule.
+class SessionError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Frame rate of recordings and of clips made from keys.
+constexpr double kDefaultClipRate = 30.0;
+
+struct Playback {
+  double time = 0;       // seconds
+  double speed = 1;      // playback rate (may be negative: backwards)
+  bool playing = false;
+  bool loop = true;
+  double loop_start = 0;
+  double loop_end = -1;  // < 0: the end of the animation
+  bool operator==(const Playback&) const = default;
+};
+
+class Session {
+ public:
+  Session(std::shared_ptr<const core::Model> model, std::string character);
+
+  const core::Model& model() const { return *model_; }
+  std::shared_ptr<const core::Model> model_ptr() const { return model_; }
+  const std::string& character() const { return character_; }
+
+  // --- the pose ---------------------------------------------------------------------------
+  const Eigen::VectorXd& q() const { return doc_.q; }
+  /// World poses of all links for the current pose.
+  const core::Data& kinematics() const { return data_; }
+  /// Sets the pose (one undo entry). @throws SessionError if q is not a valid configuration
+  void set_pose(const Eigen::VectorXd& q);
+
+  // --- dragging: one undo entry per gesture -------------------------------------------------
+  /// Grabs point p_LinkPoint (link frame) of `link`; the target starts at target_W.
+  void drag_begin(int link, const core::Vector3& target_W,
+                  const core::Vector3& p_LinkPoint = core::Vector3::Zero());
+  /// Moves the drag target (absolute, world). A rotation makes it a pose drag.
+  void drag_move(const core::Vector3& target_W,
+                 const std::optional<core::Quaternion>& rotation = std::nullopt);
+  void drag_end();
+  bool dragging() const { return drag_.has_value(); }
+  std::optional<int> dragged_link() const;
+
+  // --- pins ---------------------------------------------------------------------------------
+  /// Pins a link where it is now (replacing a pin on the same link).
+  void pin(int link, ik::TaskMode mode, const core::Vector3& p_LinkPoint = core::Vector3::Zero());
+  void unpin(int link);
+  /// Moves a pin's target.
+  void move_pin(int link, const core::Vector3& target_W,
+                const std::optional<core::Quaternion>& rotation = std::nullopt);
+  const std::vector<Pin>& pins() const { return doc_.pins; }
+
+  // --- settings ------------------------------------------------------------------------------
+  void set_solver_settings(const ik::SolverSettings& s);
+  const ik::SolverSettings& solver_settings() const { return doc_.settings; }
+  void set_scene(const Scene& scene);
+  const Scene& scene() const { return doc_.scene; }
+  void set_edit_falloff(double seconds);
+  double edit_falloff() const { return doc_.edit_falloff; }
+
+  // --- keyframes -------------------------------------------------------------------------------
+  /// Keys the current pose at time t (default: the playback time). Returns its index.
+  int key_insert(std::optional<double> time = std::nullopt,
+                 Interpolation interpolation = Interpolation::kSmooth);
+  void key_delete(int index);
+  int key_move(int index, double time);
+  void key_set_interpolation(int index, Interpolation interpolation);
+  const KeyTrack& keys() const { return doc_.keys; }
+  /// Samples the keys into the base clip at `rate` frames per second (one undo entry).
+  void bake_keys(double rate = kDefaultClipRate);
+
+  // --- clips and edit layers -------------------------------------------------------------------
+  /// Replaces the base clip (an import or a recording). Its model must be this session's.
+  void set_clip(core::Clip clip, const std::string& label = "set clip");
+  const core::Clip* clip() const { return doc_.clip.get(); }
+  const LayerStack& layers() const { return doc_.layers; }
+  void set_layer_muted(int index, bool muted);
+  void set_layer_weight(int index, double weight);
+  void remove_layer(int index);
+  /// Applies every unmuted layer to the base clip and drops the layers.
+  void bake_layers();
+  /// The animation as one clip: the layered base clip, else the keys sampled at the clip rate,
+  /// else the current pose as a single frame.
+  core::Clip animation_clip() const;
+  /// Duration of the animation (clip, else keys).
+  double duration() const;
+
+  // --- playback and recording --------------------------------------------------------------
+  void play();
+  void pause();
+  void seek(double time);
+  void set_loop(bool loop, double start = 0, double end = -1);
+  void set_speed(double speed);
+  const Playback& playback() const { return playback_; }
+  /// Starts or stops recording: while on, the posed figure is sampled at the clip rate; stopping
+  /// makes the recording the base clip (one undo entry).
+  void record(bool on);
+  bool recording() const { return recording_.has_value(); }
+
+  // --- undo ---------------------------------------------------------------------------------
+  bool undo();
+  bool redo();
+  const History& history() const { return history_; }
+
+  // --- time ---------------------------------------------------------------------------------
+  struct TickResult {
+    bool pose_changed = false;
+    const ik::Report* report = nullptr;  // when the solver ran
+  };
+  /// Advances by dt seconds of wall time: playback, the solver while something moves, the
+  /// recorder. Cheap when nothing moves.
+  TickResult tick(double dt);
+  /// True while a tick would change something (playing, dragging, pins still settling).
+  bool needs_tick() const;
+
+  // --- the document (what edits change; what undo restores; what is saved) -------------------
+  const Document& document() const { return doc_; }
+  /// Replaces the whole document (a loaded session). Clears the history.
+  void restore(Document doc, const Playback& playback);
+
+  /// An optional skinned mesh to draw and export with the character.
+  void set_skin(std::shared_ptr<const core::SkinnedMesh> skin) { skin_ = std::move(skin); }
+  const core::SkinnedMesh* skin() const { return skin_.get(); }
+
+ private:
+  friend class DocumentChange;
+  void check_link(int link, const char* field) const;
+  void commit(const Document& before, const std::string& label);
+  void apply_document(const Document& doc);
+  void refresh_kinematics();
+  void rebuild_problem();
+  bool solve_step();
+  void show_animation_at(double t);
+  void start_motion_edit();
+  void finish_motion_edit();
+
+  std::shared_ptr<const core::Model> model_;
+  std::string character_;
+  std::shared_ptr<const core::SkinnedMesh> skin_;
+  Document doc_;
+  Playback playback_;
+  History history_;
+
+  // the live gesture
+  struct Drag {
+    int link = 0;
+    core::Vector3 p_LinkPoint = core::Vector3::Zero();
+    core::Vector3 target_W = core::Vector3::Zero();
+    std::optional<core::Quaternion> rotation;
+    core::Vector3 previous_target_W = core::Vector3::Zero();
+  };
+  std::optional<Drag> drag_;
+  std::optional<Document> gesture_before_;
+  std::optional<MotionEditor> motion_editor_;  // while dragging during playback
+  int motion_edit_frame_ = -1;
+
+  // recording
+  std::optional<core::Clip> recording_;
+  double record_clock_ = 0;
+
+  // solver state
+  core::Data data_;
+  ik::Problem problem_;
+  std::unique_ptr<ik::Solver> solver_;
+  bool settling_ = false;
+  int edit_counter_ = 0;
+  int gesture_counter_ = 0;  // ids of committed edits
+  int last_gesture_ = 0;     // the newest edit, which settling amends
+};
+
+}  // namespace animator

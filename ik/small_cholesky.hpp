@@ -1,0 +1,55 @@
+// Cholesky factorization and solves for the solver's small dense systems (a few to a few dozen
+// rows), written as plain loops: at these sizes they beat the blocked general-purpose kernels.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace ik {
+
+/// A = L Lᵀ in place on the lower triangle of the square block A. Returns false when A is not
+/// positive definite (a pivot <= 0 or not finite).
+inline bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> A) {
+  const Eigen::Index m = A.rows();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    double d = A(j, j);
+    for (Eigen::Index k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
+    if (!(d > 0) || !std::isfinite(d)) return false;
+    d = std::sqrt(d);
+    A(j, j) = d;
+    const double inv = 1.0 / d;
+    for (Eigen::Index i = j + 1; i < m; ++i) {
+      double s = A(i, j);
+      for (Eigen::Index k = 0; k < j; ++k) s -= A(i, k) * A(j, k);
+      A(i, j) = s * inv;
+    }
+  }
+  return true;
+}
+
+/// B ← L⁻¹ B (forward substitution with the factor's lower triangle).
+inline void forward_substitute(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen::Ref<Eigen::MatrixXd> B) {
+  const Eigen::Index m = L.rows();
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    for (Eigen::Index i = 0; i < m; ++i) {
+      double s = B(i, c);
+      for (Eigen::Index k = 0; k < i; ++k) s -= L(i, k) * B(k, c);
+      B(i, c) = s / L(i, i);
+    }
+  }
+}
+
+/// B ← (L Lᵀ)⁻¹ B.
+inline void cholesky_solve(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen::Ref<Eigen::MatrixXd> B) {
+  forward_substitute(L, B);
+  const Eigen::Index m = L.rows();
+  for (Eigen::Index c = 0; c < B.cols(); ++c) {
+    for (Eigen::Index i = m - 1; i >= 0; --i) {
+      double s = B(i, c);
+      for (Eigen::Index k = i + 1; k < m; ++k) s -= L(k, i) * B(k, c);
+      B(i, c) = s / L(i, i);
+    }
+  }
+}
+
+}  // namespace ik

@@ -1,0 +1,317 @@
+// Tests for animator/session.hpp: gestures, pins, keys, playback, recording, editing in motion,
+// undo/redo and persistence.
+#include "animator/session.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <numbers>
+#include <random>
+
+#include "animator/session_file.hpp"
+#include "core/configuration.hpp"
+#include "core/human_figure.hpp"
+#include "core/kinematics.hpp"
+
+namespace {
+
+using namespace animator;
+using core::Quaternion;
+using core::Vector3;
+
+std::shared_ptr<const core::Model> human() {
+  static const auto m = core::build_human_figure({});
+  return m;
+}
+
+Vector3 position(const Session& s, const char* link) { return s.kinematics().X_W[s.model().link_index(link)].p; }
+
+void run(Session& s, int ticks, double dt = 1.0 / 60) {
+  for (int k = 0; k < ticks; ++k) s.tick(dt);
+}
+
+// A synthetic clip of the figure: arms swinging, knees bending, the root bobbing (2 s at 30 fps).
+core::Clip swinging_clip(const core::Model& m, int frames = 60) {
+  core::Clip c;
+  c.frame_time = 1.0 / 30;
+  for (int f = 0; f < frames; ++f) {
+    const double t = f * c.frame_time;
+    Eigen::VectorXd q = core::neutral_configuration(m);
+    q[1] += 0.02 * std::sin(2 * std::numbers::pi * t);  // root height
+    for (const char* arm : {"l_uarm", "r_uarm"}) {
+      const int j = m.link_index(arm);
+      core::set_quaternion_at(q, m.idx_q[j], Quaternion(Eigen::AngleAxisd(0.4 * std::sin(2 * std::numbers::pi * t), Vector3::UnitX())));
+    }
+    for (const char* knee : {"l_shank", "r_shank"}) q[m.idx_q[m.link_index(knee)]] = 0.3 + 0.2 * std::sin(std::numbers::pi * t);
+    c.frames.push_back(q);
+  }
+  return c;
+}
+
+TEST(Session, DragGestureMovesTheHandAndIsOneUndoEntry) {
+  Session s(human(), "human48");
+  const int hand = s.model().link_index("r_hand");
+  const Eigen::VectorXd q0 = s.q();
+  const Vector3 start = position(s, "r_hand");
+  s.drag_begin(hand, start);
+  for (int k = 1; k <= 30; ++k) {
+    s.drag_move(start + Vector3(-0.01 * k, 0.01 * k, 0.005 * k));
+    s.tick(1.0 / 60);
+  }
+  run(s, 30);
+  s.drag_end();
+  EXPECT_LT((position(s, "r_hand") - (start + Vector3(-0.3, 0.3, 0.15))).norm(), 1e-3);
+  EXPECT_EQ(s.history().size(), 1u);
+  const Eigen::VectorXd q1 = s.q();
+  ASSERT_TRUE(s.undo());
+  EXPECT_EQ(s.q(), q0);
+  ASSERT_TRUE(s.redo());
+  EXPECT_EQ(s.q(), q1);
+  EXPECT_FALSE(s.redo());
+}
+
+TEST(Session, PinnedFeetStayWhileTheHandIsDragged) {
+  Session s(human(), "human48");
+  const int lf = s.model().link_index("l_foot"), rf = s.model().link_index("r_foot");
+  s.pin(lf, ik::TaskMode::kPose);
+  s.pin(rf, ik::TaskMode::kPose);
+  const Vector3 l0 = position(s, "l_foot"), r0 = position(s, "r_foot");
+  const int hand = s.model().link_index("r_hand");
+  const Vector3 start = position(s, "r_hand");
+  s.drag_begin(hand, start);
+  for (int k = 1; k <= 40; ++k) {
+    s.drag_move(start + Vector3(0, -0.008 * k, 0.004 * k));  // reach down and forward
+    s.tick(1.0 / 60);
+  }
+  s.drag_end();
+  run(s, 120);
+  EXPECT_LT((position(s, "l_foot") - l0).norm(), 1e-3);
+  EXPECT_LT((position(s, "r_foot") - r0).norm(), 1e-3);
+  EXPECT_FALSE(s.needs_tick());  // settled
+}
+
+TEST(Session, BadRequestsAreRefusedWithoutChangingAnything) {
+  Session s(human(), "human48");
+  const nlohmann::json before = session_to_json(s);
+  EXPECT_THROW(s.drag_begin(0, Vector3::Zero()), SessionError);
+  EXPECT_THROW(s.drag_begin(999, Vector3::Zero()), SessionError);
+  EXPECT_THROW(s.drag_begin(2, Vector3(NAN, 0, 0)), SessionError);
+  EXPECT_THROW(s.drag_move(Vector3::Zero()), SessionError);
+  EXPECT_THROW(s.unpin(3), SessionError);
+  EXPECT_THROW(s.key_delete(0), SessionError);
+  EXPECT_THROW(s.seek(INFINITY), SessionError);
+  ik::SolverSettings bad;
+  bad.damping = -1;
+  EXPECT_THROW(s.set_solver_settings(bad), SessionError);
+  try {
+    s.drag_begin(999, Vector3::Zero());
+  } catch (const SessionError& e) {
+    EXPECT_NE(std::string(e.what()).find("drag_begin.link"), std::string::npos);
+  }
+  EXPECT_EQ(session_to_json(s), before);
+  EXPECT_EQ(s.history().size(), 0u);
+}
+
+TEST(Session, KeysInterpolateAndPlayBack) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  const int elbow = m.link_index("r_farm");
+  s.key_insert(0.0);
+  Eigen::VectorXd q = s.q();
+  q[m.idx_q[elbow]] = 1.2;
+  s.set_pose(q);
+  s.key_insert(1.0, Interpolation::kLinear);
+  ASSERT_EQ(s.keys().keys().size(), 2u);
+  s.seek(0.5);
+  EXPECT_NEAR(s.q()[m.idx_q[elbow]], 0.6, 1e-9);  // smooth from key 0: symmetric Hermite midpoint
+  s.play();
+  run(s, 15);
+  EXPECT_NEAR(s.playback().time, 0.75, 1e-9);
+  s.pause();
+  // step interpolation holds the first key
+  s.key_set_interpolation(0, Interpolation::kStep);
+  s.seek(0.9);
+  EXPECT_EQ(s.q()[m.idx_q[elbow]], 0.0);
+  s.bake_keys(30);
+  ASSERT_NE(s.clip(), nullptr);
+  EXPECT_EQ(s.clip()->size(), 31);
+}
+
+TEST(Session, RecordingBecomesTheClip) {
+  Session s(human(), "human48");
+  const int hand = s.model().link_index("l_hand");
+  const Vector3 start = position(s, "l_hand");
+  s.record(true);
+  s.drag_begin(hand, start);
+  for (int k = 1; k <= 60; ++k) {
+    s.drag_move(start + Vector3(0.003 * k, 0.004 * k, 0));
+    s.tick(1.0 / 60);
+  }
+  s.drag_end();
+  s.record(false);
+  ASSERT_NE(s.clip(), nullptr);
+  EXPECT_EQ(s.clip()->size(), 31);  // 1 s at 30 fps plus the first frame
+  EXPECT_NEAR(s.clip()->frame_time, 1.0 / 30, 1e-15);
+  EXPECT_NE(s.clip()->frames.front(), s.clip()->frames.back());
+}
+
+TEST(Session, PlaybackLoopsAndRespectsSpeed) {
+  Session s(human(), "human48");
+  s.set_clip(swinging_clip(s.model()));
+  const double length = s.duration();
+  s.set_loop(true);
+  s.set_speed(2.0);
+  s.play();
+  run(s, 45, 1.0 / 30);  // 1.5 s of wall time at double speed = 3 s of a 1.97 s clip
+  EXPECT_NEAR(s.playback().time, std::fmod(3.0, length), 1e-9);
+  s.set_loop(false);
+  run(s, 60, 1.0 / 30);
+  EXPECT_FALSE(s.playback().playing);
+  EXPECT_NEAR(s.playback().time, length, 1e-12);
+}
+
+TEST(Session, EditingInMotionKeepsPinnedFeetAndLeavesOtherFramesUntouched) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  const core::Clip base = swinging_clip(m, 90);
+  s.set_clip(base);
+  s.pin(m.link_index("l_foot"), ik::TaskMode::kPose);
+  s.pin(m.link_index("r_foot"), ik::TaskMode::kPose);
+  s.set_edit_falloff(0.2);
+  s.set_loop(false);
+  s.seek(1.0);
+  s.play();
+  const int hand = m.link_index("r_hand");
+  const Vector3 start = position(s, "r_hand");
+  s.drag_begin(hand, start);
+  core::Data ref(m);
+  double foot_drift = 0;
+  for (int k = 1; k <= 20; ++k) {
+    s.drag_move(start + Vector3(-0.004 * k, 0.006 * k, 0.004 * k));
+    s.tick(1.0 / 30);
+    // the feet follow the clip's feet (moving pins)
+    core::forward_kinematics(m, ref, base.frames[std::lround(s.playback().time * 30)]);
+    for (const char* foot : {"l_foot", "r_foot"}) {
+      foot_drift = std::max(foot_drift, (position(s, foot) - ref.X_W[m.link_index(foot)].p).norm());
+    }
+  }
+  s.drag_end();
+  s.pause();
+  ASSERT_EQ(s.layers().size(), 1u);
+  EXPECT_LT(foot_drift, 1e-3);
+  const EditLayer& layer = *s.layers()[0];
+  EXPECT_EQ(layer.first_frame, 31);
+  EXPECT_EQ(layer.last_frame(), 50);
+  // outside the edited frames and the falloff (0.2 s = 6 frames) the motion is bit-identical
+  const core::Clip edited = s.animation_clip();
+  for (int f = 0; f < base.size(); ++f) {
+    const bool outside = f < layer.first_frame - 6 || f > layer.last_frame() + 6;
+    if (outside) {
+      EXPECT_EQ(std::memcmp(edited.frames[f].data(), base.frames[f].data(), sizeof(double) * m.nq), 0) << f;
+    }
+  }
+  EXPECT_NE(edited.frames[40], base.frames[40]);
+  // muting restores the base; the edit is undoable as one entry
+  s.set_layer_muted(0, true);
+  EXPECT_EQ(s.animation_clip().frames[40], base.frames[40]);
+  s.undo();
+  EXPECT_EQ(s.animation_clip().frames[40], edited.frames[40]);
+}
+
+TEST(Session, UndoRedoOfAThousandRandomEditsRestoresSerializedStatesExactly) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto state = [&] { return session_to_json(s, /*include_character=*/false).dump(); };
+  std::vector<std::string> states{state()};
+  const std::vector<const char*> links = {"r_hand", "l_hand", "head", "pelvis", "l_foot", "r_foot", "chest"};
+  for (int e = 0; e < 1000; ++e) {
+    const int link = m.link_index(links[rng() % links.size()]);
+    const size_t before = s.history().size();
+    switch (rng() % 6) {
+      case 0: {  // a short drag gesture
+        const Vector3 p = s.kinematics().X_W[link].p;
+        s.drag_begin(link, p);
+        for (int k = 0; k < 3; ++k) {
+          s.drag_move(p + 0.05 * Vector3(u(rng), u(rng), u(rng)));
+          s.tick(1.0 / 60);
+        }
+        s.drag_end();
+        break;
+      }
+      case 1:
+        s.pin(link, rng() % 2 ? ik::TaskMode::kPose : ik::TaskMode::kPosition);
+        break;
+      case 2:
+        if (!s.pins().empty()) s.unpin(s.pins()[rng() % s.pins().size()].link);
+        else s.key_insert(std::abs(u(rng)) * 3);
+        break;
+      case 3: s.key_insert(std::abs(u(rng)) * 3); break;
+      case 4:
+        if (!s.keys().empty()) s.key_delete(static_cast<int>(rng() % s.keys().keys().size()));
+        else s.key_insert(0.5);
+        break;
+      case 5: {
+        ik::SolverSettings st = s.solver_settings();
+        st.damping = 0.01 + 0.05 * std::abs(u(rng));
+        s.set_solver_settings(st);
+        break;
+      }
+    }
+    // settle between edits so the next gesture starts from rest (no extra entries)
+    run(s, 2);
+    if (s.history().size() > before) states.push_back(state());
+    else states.back() = state();
+  }
+  // every committed entry restores its serialized state exactly
+  const size_t entries = s.history().size();
+  ASSERT_EQ(states.size(), entries + 1);
+  // undo all: each step restores exactly the state before that edit; redo all: exactly after
+  for (size_t k = 0; k < entries; ++k) {
+    ASSERT_TRUE(s.undo());
+    EXPECT_EQ(state(), states[entries - 1 - k]) << "undo " << k;
+  }
+  EXPECT_FALSE(s.undo());
+  for (size_t k = 0; k < entries; ++k) {
+    ASSERT_TRUE(s.redo());
+    EXPECT_EQ(state(), states[k + 1]) << "redo " << k;
+  }
+  EXPECT_FALSE(s.redo());
+}
+
+TEST(Session, SavesAndLoadsIdentically) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  s.set_clip(swinging_clip(m));
+  s.pin(m.link_index("l_foot"), ik::TaskMode::kPose);
+  s.key_insert(0.25);
+  s.seek(0.5);
+  s.play();
+  const Vector3 start = position(s, "r_hand");
+  s.drag_begin(m.link_index("r_hand"), start);
+  for (int k = 0; k < 5; ++k) {
+    s.drag_move(start + Vector3(0, 0.01 * k, 0));
+    s.tick(1.0 / 30);
+  }
+  s.drag_end();
+  s.pause();
+  const std::string path = (std::filesystem::temp_directory_path() / "pindrag_session_test.json").string();
+  save_session(s, path);
+  const auto loaded = load_session(path);
+  EXPECT_EQ(session_to_json(*loaded).dump(), session_to_json(s).dump());
+  EXPECT_TRUE(loaded->model() == s.model());
+  std::filesystem::remove(path);
+  // a damaged file is refused with the field named
+  nlohmann::json j = session_to_json(s);
+  j["pins"][0]["link"] = "nope";
+  try {
+    session_from_json(j, "test");
+    FAIL();
+  } catch (const SessionError& e) {
+    EXPECT_NE(std::string(e.what()).find("/pins/0/link: unknown link 'nope'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
