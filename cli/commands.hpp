@@ -9,6 +9,7 @@ namespace cli {
 void add_info_command(CLI::App& app);
 void add_character_command(CLI::App& app);
 void add_solve_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
 void add_dynamics_command(CLI::App& app);
 
 }  // namespace cli

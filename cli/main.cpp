@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
   cli::add_info_command(app);
   cli::add_character_command(app);
   cli::add_solve_command(app);
+  cli::add_bench_command(app);
   cli::add_dynamics_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;

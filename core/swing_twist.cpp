@@ -1,6 +1,7 @@
 #include "core/swing_twist.hpp"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <numbers>
 
@@ -150,24 +151,21 @@ RangeInnerBounds inner_bounds(const SphericalRange& range) {
   }
   if (!origin_inside) return b;
   // boundary edges belong to one triangle only; the disk may reach the nearest of them
-  double r = kInfinity;
-  for (size_t t = 0; t < range.triangles.size(); ++t) {
+  std::map<std::pair<int, int>, int> uses;  // undirected edge → number of triangles using it
+  for (const auto& t : range.triangles) {
     for (int e = 0; e < 3; ++e) {
-      const int a = range.triangles[t][e], c = range.triangles[t][(e + 1) % 3];
-      int uses = 0;
-      for (const auto& u : range.triangles) {
-        for (int f = 0; f < 3; ++f) {
-          const int x = u[f], y = u[(f + 1) % 3];
-          if ((x == a && y == c) || (x == c && y == a)) ++uses;
-        }
-      }
-      if (uses != 1) continue;
-      const Eigen::Vector2d& p0 = range.swing[a];
-      const Eigen::Vector2d& p1 = range.swing[c];
-      const Eigen::Vector2d d = p1 - p0;
-      const double s = std::clamp(-p0.dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-      r = std::min(r, (p0 + s * d).norm());
+      const int a = t[e], c = t[(e + 1) % 3];
+      ++uses[{std::min(a, c), std::max(a, c)}];
     }
+  }
+  double r = kInfinity;
+  for (const auto& [edge, count] : uses) {
+    if (count != 1) continue;
+    const Eigen::Vector2d& p0 = range.swing[edge.first];
+    const Eigen::Vector2d& p1 = range.swing[edge.second];
+    const Eigen::Vector2d d = p1 - p0;
+    const double s = std::clamp(-p0.dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+    r = std::min(r, (p0 + s * d).norm());
   }
   // shrink a hair so rounding at the rim never accepts a point the full test would refuse
   b.swing_radius = std::isfinite(r) ? r * (1.0 - 1e-9) : -1;

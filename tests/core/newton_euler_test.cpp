@@ -106,6 +106,12 @@ std::vector<int> dh_to_ours(const core::Model& m) {
   return idx;
 }
 
+std::string sci(double x) {
+  std::ostringstream o;
+  o << std::scientific << std::setprecision(2) << x;
+  return o.str();
+}
+
 double rel(const Eigen::MatrixXd& x, const Eigen::MatrixXd& ref) {
   return (x - ref).cwiseAbs().maxCoeff() / ref.cwiseAbs().maxCoeff();
 }
@@ -187,7 +193,7 @@ TEST(NewtonEuler, MassMatrixEqualsCrba) {
     worst = std::max(worst, rel(M_ne, M_crba));
   }
   EXPECT_LT(worst, 1e-10);
-  RecordProperty("max_rel_mass_matrix", std::to_string(worst));
+  RecordProperty("max_rel_mass_matrix", sci(worst));
 }
 
 TEST(NewtonEuler, InverseDynamicsEqualsRnea) {
@@ -211,7 +217,8 @@ TEST(NewtonEuler, InverseDynamicsEqualsRnea) {
   EXPECT_LT(worst_tau, 1e-10);
   EXPECT_LT(worst_bias, 1e-10);
   EXPECT_LT(worst_g, 1e-10);
-  RecordProperty("max_rel_tau", std::to_string(worst_tau));
+  RecordProperty("max_rel_tau", sci(worst_tau));
+  RecordProperty("max_rel_bias", sci(worst_bias));
 }
 
 TEST(NewtonEuler, ForwardDynamicsEqualsAba) {
@@ -229,6 +236,7 @@ TEST(NewtonEuler, ForwardDynamicsEqualsAba) {
     EXPECT_LT(rel(core::dh_inverse_dynamics(dh, s.theta, s.theta_dot, a_ne), s.tau), 1e-12);
   }
   EXPECT_LT(worst, 1e-10);
+  RecordProperty("max_rel_accelerations", sci(worst));
 }
 
 TEST(NewtonEuler, LoadAsExternalForceEqualsLoadAsMassAtRest) {
@@ -436,6 +444,7 @@ TEST(NewtonEuler, PaperInverseDynamicsExample) {
   }
   EXPECT_LT(level, 1e-15);
   EXPECT_LT(worst, 1e-10);
+  RecordProperty("max_rel_tau_along_trajectory", sci(worst));
   // at rest (start and end) the velocity terms vanish; the weights have no moment about the
   // vertical slewing axis, so joint 1 only ever accelerates the arm
   EXPECT_EQ(core::dh_velocity_terms(dh, s0.theta, s0.theta_dot).norm(), 0.0);
@@ -448,7 +457,7 @@ TEST(NewtonEuler, PaperInverseDynamicsExample) {
     double peak = 0;
     for (const auto& tau : torques) peak = std::max(peak, std::abs(tau[j]));
     EXPECT_LT(peak, effort) << "joint " << j + 1;
-    RecordProperty("peak_tau" + std::to_string(j + 1), std::to_string(peak));
+    RecordProperty("peak_tau" + std::to_string(j + 1), sci(peak));
   }
   // the load's weight is 3200 N (the paper's figure)
   EXPECT_NEAR(326.1978 * kG, kLoadWeight, 0.01);
