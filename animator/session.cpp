@@ -19,7 +19,7 @@ bool finite(const core::Vector3& v) { return v.allFinite(); }
 
 Session::Session(std::shared_ptr<const core::Model> model, std::string character)
     : model_(std::move(model)), character_(std::move(character)), data_(*model_) {
-  doc_.q = core::neutral_configuration(*model_);
+  doc_.q = core::rest_configuration(*model_);  // limbs slightly off straight: see its comment
   solver_ = std::make_unique<ik::Solver>(*model_, doc_.settings);
   refresh_kinematics();
 }

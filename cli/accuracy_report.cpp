@@ -36,7 +36,7 @@ double ease(double s) {
 // Runs one scenario with one setting and adds to the metrics.
 void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSettings& settings, Metrics& out) {
   core::Data data(m);
-  Eigen::VectorXd q = core::neutral_configuration(m);
+  Eigen::VectorXd q = core::rest_configuration(m);
   core::forward_kinematics(m, data, q);
   ik::Problem problem;
   std::vector<int> pins;
@@ -46,7 +46,7 @@ void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSett
                                            .target_R_W = Quaternion(data.X_W[l].R), .mode = ik::TaskMode::kPose}));
   }
   ik::DragTask drag;
-  Vector3 start, goal;
+  Vector3 start = Vector3::Zero(), goal = Vector3::Zero();
   Quaternion r_start = Quaternion::Identity(), r_goal = Quaternion::Identity();
   int ramp = sc.frames * 3 / 4;
   if (sc.name == "reach" || sc.name == "reach_beyond") {

@@ -122,7 +122,7 @@ json run_solve_request(const json& r) {
   const int frames = r.contains("frames") ? integer_in(r["frames"], "/frames", 0, 1000000) : 120;
   ik::SolverSettings settings = settings_from(r);
 
-  Eigen::VectorXd q = core::neutral_configuration(m);
+  Eigen::VectorXd q = core::rest_configuration(m);
   if (r.contains("start")) {
     const json& s = r["start"];
     if (!s.is_object() || !s.contains("q") || !s["q"].is_array() || s["q"].size() != static_cast<size_t>(m.nq)) {

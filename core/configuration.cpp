@@ -1,5 +1,6 @@
 #include "core/configuration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -12,6 +13,20 @@ Eigen::VectorXd neutral_configuration(const Model& model) {
     const int iq = model.idx_q[i];
     if (model.joint_type[i] == JointType::kSpherical) q[iq] = 1.0;
     if (model.joint_type[i] == JointType::kFree) q[iq + 3] = 1.0;
+  }
+  return q;
+}
+
+Eigen::VectorXd rest_configuration(const Model& model) {
+  constexpr double kOffEnd = 0.02;  // fraction of the way to the middle of the range
+  Eigen::VectorXd q = neutral_configuration(model);
+  for (int i = 1; i < model.njoints; ++i) {
+    const JointType t = model.joint_type[i];
+    if (t != JointType::kRevolute && t != JointType::kPrismatic) continue;
+    const JointLimits& L = model.limits[i];
+    double value = 0;
+    if (std::isfinite(L.lower) && std::isfinite(L.upper)) value = kOffEnd * 0.5 * (L.lower + L.upper);
+    q[model.idx_q[i]] = std::clamp(value, L.lower, L.upper);
   }
   return q;
 }

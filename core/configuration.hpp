@@ -21,6 +21,13 @@ struct State {
 Eigen::VectorXd neutral_configuration(const Model& model);
 State neutral_state(const Model& model);
 
+/// Where posing starts: the neutral configuration with every 1-DOF joint moved off the ends of
+/// its range, by 2 % of the way from zero to the middle of its limits (a knee with limits
+/// [-5°, 135°] rests at 1.3°), and clamped into its limits. Zero is where limbs are straight,
+/// a singular configuration for IK (digest §4 #1): a straight leg cannot start to shorten, so
+/// pinned feet would slide instead of the knees bending. Joints with symmetric limits stay at 0.
+Eigen::VectorXd rest_configuration(const Model& model);
+
 /// q_out = q ⊕ v dt on the manifold. q_out may alias q. Allocation-free.
 void integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double dt,
                Eigen::VectorXd& q_out);

@@ -678,10 +678,13 @@ class FigureBuilder {
     set_body(l, remainder(whole_foot(), {toes_in_foot()}));
     // nominal direction along the foot (+z); ψ = 0 plantar flexion (toes down), 90° abduction
     // (toe-out, lateral), 180° dorsiflexion, 270° adduction (toe-in); twist about the foot's
-    // long axis, positive = eversion. AAOS (1965): plantar flexion 50°, dorsiflexion 20°,
-    // inversion 35°, eversion 15°, forefoot adduction 20°, abduction 10°.
+    // long axis, positive = eversion. AAOS (1965): plantar flexion 50°, inversion 35°, eversion
+    // 15°, forefoot adduction 20°, abduction 10°. Dorsiflexion: AAOS gives 20° for the unloaded
+    // foot, but with the body's weight on it (knee over the toes, as in a squat or a lunge) it
+    // reaches 35–45° (weight-bearing lunge test, Bennell et al. 1998); a posing figure squats
+    // with its feet pinned flat, so it gets the weight-bearing 35°.
     const Quaternion F = range_frame(Vector3::UnitZ(), -Vector3::UnitY());
-    l.joint.range = elliptic_range(F, deg(50), deg(10), deg(20), deg(20), deg(-35), deg(15));
+    l.joint.range = elliptic_range(F, deg(50), deg(10), deg(35), deg(20), deg(-35), deg(15));
     const double zh = z_heel();
     const double zm = p_FootMtp().z();
     const double hb = kFootBoxHeight * h_ankle_;
