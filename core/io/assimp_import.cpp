@@ -142,8 +142,11 @@ Transform rigid(const Matrix4& M, double& scale_error) {
   Eigen::JacobiSVD<Matrix3> svd(L, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Matrix3 U = svd.matrixU();
   const Matrix3 V = svd.matrixV();
+  // the singular values are the diagonal of Uᵀ L V (read that way rather than through
+  // singularValues(), where GCC 12 at -O3 reports a false -Wmaybe-uninitialized)
+  const Vector3 sigma = (U.transpose() * L * V).diagonal();
   if ((U * V.transpose()).determinant() < 0) U.col(2) = -U.col(2);
-  scale_error = (svd.singularValues().array() - 1.0).abs().maxCoeff();
+  scale_error = (sigma.array() - 1.0).abs().maxCoeff();
   return {U * V.transpose(), M.topRightCorner<3, 1>()};
 }
 
@@ -516,7 +519,9 @@ class Converter {
     info.start = lo;
     info.end = hi;
     const double seconds = (hi - lo) / info.ticks_per_second;
-    const double n = std::ceil(seconds * options_.frame_rate - 1e-6) + 1;
+    // key times are often single precision (glTF): a last key within a thousandth of a frame
+    // past a frame time does not get a frame of its own
+    const double n = std::ceil(seconds * options_.frame_rate - 1e-3) + 1;
     if (!(n <= kMaxFrames)) {
       throw std::runtime_error("animation '" + std::string(a->mName.C_Str()) + "' lasts " +
                                num(seconds) + " s: more than " + num(kMaxFrames) + " frames");
@@ -888,7 +893,10 @@ int import_in_child(const std::string& path, const ImportOptions& options, int f
                            aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const aiScene* scene = importer.ReadFile(path, flags);
     if (scene == nullptr || scene->mRootNode == nullptr) {
-      error = std::string("assimp could not read it: ") + importer.GetErrorString();
+      const std::string why = importer.GetErrorString();
+      // assimp catches the allocation failure itself: it is the memory limit
+      if (why.find("bad_alloc") != std::string::npos) throw std::bad_alloc();
+      error = "assimp could not read it: " + why;
     } else {
       ReplyWriter body_writer;
       Converter(*scene, path, options).run(body_writer);

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <chrono>
 #include <cstring>
 #include <new>
@@ -124,6 +125,11 @@ std::string describe_signal(int sig) {
 }
 
 std::string mib(std::size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; }
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g s", s);
+  return buf;
+}
 
 }  // namespace
 
@@ -221,13 +227,13 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
     result.message = "wrote more than " + mib(limits.max_reply_bytes) + " of results; stopped";
   } else if (timed_out) {
     result.status = SandboxStatus::kTimeout;
-    result.message = "did not finish within " + std::to_string(limits.timeout_seconds) +
-                     " s of wall-clock time; stopped";
+    result.message = "did not finish within " + seconds(limits.timeout_seconds) +
+                     " of wall-clock time; stopped";
   } else if (result.signal == SIGXCPU ||
              (result.signal == SIGKILL && cpu >= std::max(1, limits.cpu_seconds))) {
     result.status = SandboxStatus::kCpuLimit;
-    result.message = "exceeded its CPU time limit of " + std::to_string(std::max(1, limits.cpu_seconds)) +
-                     " s; stopped";
+    result.message = "exceeded its CPU time limit of " +
+                     seconds(std::max(1, limits.cpu_seconds)) + "; stopped";
   } else if (result.exit_status == kSandboxOutOfMemory) {
     result.status = SandboxStatus::kMemoryLimit;
     result.message = "ran out of memory under its limit of " + mib(limits.memory_bytes);

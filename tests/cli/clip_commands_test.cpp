@@ -1,0 +1,260 @@
+// Tests for `pindrag convert`, `pindrag edit` and `pindrag info` on clips, run as the executable
+// (exit status, stdout, stderr) on the shared CMU walk, plus the edit script reader directly.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli/edit_script.hpp"
+#include "cli/json_fields.hpp"
+#include "core/io/bvh.hpp"
+#include "core/kinematics.hpp"
+#include "tests/core/io/gltf_reader.hpp"
+#include "tests/fixtures/fixtures.hpp"
+
+namespace {
+
+using nlohmann::json;
+
+struct Outcome {
+  int status = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// runs `pindrag <args>` with stdout and stderr captured in files of `dir`
+Outcome pindrag(const gltf_test::TempDir& dir, const std::string& args) {
+  const std::string out = dir.path("stdout.txt"), err = dir.path("stderr.txt");
+  const std::string cmd = std::string(PINDRAG_EXE) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+  const int raw = std::system(cmd.c_str());
+  Outcome r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string walk() { return fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh"; }
+
+// world positions (metres) of the named joints of a BVH document, every frame
+using Positions = std::map<std::string, std::vector<core::Vector3>>;
+Positions joint_positions(const core::io::BvhDocument& doc, double scale) {
+  Positions p;
+  for (int f = 0; f < doc.frames; ++f) {
+    const auto poses = core::io::bvh_world_poses(doc, f);
+    for (std::size_t n = 0; n < doc.nodes.size(); ++n) {
+      if (!doc.nodes[n].is_end_site()) p[doc.nodes[n].name].push_back(scale * poses[n].p);
+    }
+  }
+  return p;
+}
+
+core::io::BvhDocument read_bvh(const std::string& path) { return core::io::parse_bvh(slurp(path), path); }
+
+TEST(ConvertCommand, BvhToGlbAndBackKeepsEveryJointsWorldPositions) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const std::string glb = dir.path("walk.glb"), bvh = dir.path("walk.bvh");
+  Outcome r = pindrag(dir, "convert " + walk() + " " + glb);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("344 frames"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << "no progress bar when stderr is not a terminal";
+  // back through the skinned import (the stick figure carries the skeleton)
+  r = pindrag(dir, "convert " + glb + " " + bvh + " --fps 120 --scale 0.01");  // to centimetres
+  ASSERT_EQ(r.status, 0) << r.err;
+  const core::io::BvhDocument src = read_bvh(walk()), back = read_bvh(bvh);
+  ASSERT_EQ(back.frames, src.frames);
+  EXPECT_NEAR(back.frame_time, src.frame_time, 1e-6);
+  const Positions a = joint_positions(src, core::io::kCmuUnit), b = joint_positions(back, 0.01);
+  const double height = core::io::bvh_rest_extent(src).height * core::io::kCmuUnit;
+  double worst = 0;
+  for (const auto& [name, track] : a) {
+    const auto it = b.find(name);
+    ASSERT_NE(it, b.end()) << name;
+    for (int f = 0; f < src.frames; ++f) worst = std::max(worst, (track[f] - it->second[f]).norm());
+  }
+  EXPECT_LT(worst, 1e-4 * height) << "worst joint position error " << worst << " m";
+}
+
+TEST(ConvertCommand, BvhToBvhWithOrderAndRate) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const std::string out = dir.path("walk_xyz.bvh");
+  const Outcome r = pindrag(dir, "convert " + walk() + " " + out + " --order XYZ --fps 60");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const core::io::BvhDocument src = read_bvh(walk()), got = read_bvh(out);
+  EXPECT_EQ(got.frames, 172);  // 343 frames of 1/120 s = 2.858 s → frames 0..171 at 60 fps
+  EXPECT_NEAR(got.frame_time, 1.0 / 60, 1e-9);
+  for (const auto& n : got.nodes) {
+    if (n.is_end_site()) continue;
+    const std::size_t r0 = n.channels.size() - 3;
+    EXPECT_EQ(n.channels[r0], core::io::BvhChannel::kXrotation) << n.name;
+    EXPECT_EQ(n.channels[r0 + 2], core::io::BvhChannel::kZrotation) << n.name;
+  }
+  // output frame f is source frame 2f (up to the file's frame time .0083333 not being exactly
+  // 1/120 s: at most 11 µs apart): the round-trip tolerance, 1e-4 × height, in the same unit
+  const Positions a = joint_positions(src, core::io::kCmuUnit), b = joint_positions(got, core::io::kCmuUnit);
+  const double height = core::io::bvh_rest_extent(src).height * core::io::kCmuUnit;
+  double worst = 0;
+  for (const auto& [name, track] : b) {
+    for (int f = 0; f < got.frames; ++f) worst = std::max(worst, (track[f] - a.at(name)[2 * f]).norm());
+  }
+  EXPECT_LT(worst, 1e-4 * height) << "worst joint position error " << worst << " m";
+}
+
+TEST(ConvertCommand, BadInputsExitNonZeroNamingTheProblem) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const std::string out = dir.path("out.bvh");
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {"convert " + walk() + " " + dir.path("out.txt"), "OUT: "},
+      {"convert " + walk() + " " + out + " --order XXY", "--order: 'XXY'"},
+      {"convert " + walk() + " " + dir.path("o.glb") + " --order ZXY", "--order: applies to a BVH output only"},
+      {"convert " + walk() + " " + out + " --scale -1", "--scale: must be a positive number"},
+      {"convert " + walk() + " " + out + " --fps 0", "--fps must be a number in (0, 1000]"},
+      {"convert " + dir.path("missing.bvh") + " " + out, "missing.bvh"},
+      {"convert " + fixtures::source_dir() + "/tests/fixtures/malformed/bvh/nan_value.bvh " + out, "nan_value.bvh: line"},
+  };
+  for (const Case& c : cases) {
+    const Outcome r = pindrag(dir, c.args);
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
+  }
+}
+
+TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const Outcome r = pindrag(dir, "info " + walk());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j.at("name"), "cmu_walk_cgspeed");
+  EXPECT_EQ(j.at("clip").at("frames"), 344);
+  EXPECT_NEAR(j.at("clip").at("frame_time").get<double>(), 0.0083333, 1e-12);
+  EXPECT_NEAR(j.at("clip").at("duration").get<double>(), 343 * 0.0083333, 1e-9);
+  EXPECT_EQ(j.at("clip").at("joints"), 31);
+  EXPECT_EQ(j.at("links"), 31 + 7);  // and 7 End Sites
+  // a skinned glTF: its first animation and its mesh
+  const Outcome g = pindrag(dir, "info " + fixtures::data_dir() + "/gltf/CesiumMan.glb");
+  ASSERT_EQ(g.status, 0) << g.err;
+  const json k = json::parse(g.out);
+  EXPECT_GT(k.at("clip").at("frames").get<int>(), 1);
+  EXPECT_GT(k.at("clip").at("skin").at("vertices").get<int>(), 0);
+  // a bundled character still prints its summary, without a clip
+  const Outcome h = pindrag(dir, "info human48");
+  ASSERT_EQ(h.status, 0) << h.err;
+  EXPECT_FALSE(json::parse(h.out).contains("clip"));
+  const Outcome bad = pindrag(dir, "info " + dir.path("nothing.bvh"));
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.err.find("nothing.bvh"), std::string::npos) << bad.err;
+}
+
+// both feet pinned while the right hand is pulled up and forward over half a second
+json walk_script() {
+  return {{"falloff", 0.1},
+          {"edits",
+           {{{"start", 0.8},
+             {"end", 1.3},
+             {"pins", {{{"link", "LeftFoot"}, {"mode", "pose"}}, {{"link", "RightFoot"}, {"mode", "pose"}}}},
+             {"drag",
+              {{"link", "RightHand"},
+               {"keys", {{{"time", 0.8}, {"position", {0, 0, 0}}}, {{"time", 1.0}, {"position", {0, 0.08, 0.09}}}}}}}}}}};
+}
+
+TEST(EditCommand, EditsInMotionKeepingFeetAndOtherFrames) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const std::string script = dir.path("edits.json"), edited = dir.path("edited.bvh"), plain = dir.path("plain.bvh");
+  std::ofstream(script) << walk_script().dump(2);
+  Outcome r = pindrag(dir, "edit " + walk() + " --script " + script + " -o " + edited);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = pindrag(dir, "convert " + walk() + " " + plain);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const core::io::BvhDocument a = read_bvh(plain), b = read_bvh(edited);
+  ASSERT_EQ(a.frames, b.frames);
+  const Positions pa = joint_positions(a, core::io::kCmuUnit), pb = joint_positions(b, core::io::kCmuUnit);
+  const int first = 96, last = 156, falloff = 12;  // 0.8 s, 1.3 s and 0.1 s at 120 fps
+  double foot = 0, hand = 0;
+  for (int f = 0; f < a.frames; ++f) {
+    const bool same = std::equal(a.frame(f), a.frame(f) + a.channels, b.frame(f));
+    if (f < first + 1 - falloff || f > last + falloff) {
+      EXPECT_TRUE(same) << "frame " << f;
+    }
+    if (f > first && f <= last) {
+      for (const char* n : {"LeftFoot", "RightFoot"}) foot = std::max(foot, (pa.at(n)[f] - pb.at(n)[f]).norm());
+    }
+    if (f >= 120 && f <= last) hand = std::max(hand, (pa.at("RightHand")[f] - pb.at("RightHand")[f]).norm());
+  }
+  EXPECT_LE(foot, 1e-3) << "feet drift in metres";
+  EXPECT_GT(hand, 0.1) << "the hand follows the drag 12 cm off the clip";
+}
+
+TEST(EditCommand, BadScriptsExitNonZeroNamingTheField) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const std::string script = dir.path("edits.json"), out = dir.path("out.bvh");
+  auto expect_refused = [&](const json& s, const std::string& field) {
+    std::ofstream(script) << s.dump();
+    const Outcome r = pindrag(dir, "edit " + walk() + " --script " + script + " -o " + out);
+    EXPECT_NE(r.status, 0) << s;
+    EXPECT_NE(r.err.find(field), std::string::npos) << field << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  };
+  json s = walk_script();
+  s["edits"][0]["drag"]["link"] = "Tail";
+  expect_refused(s, "/edits/0/drag/link: unknown link 'Tail'");
+  s = walk_script();
+  s["edits"][0]["drag"].erase("keys");
+  expect_refused(s, "/edits/0/drag/keys: missing");
+  s = walk_script();
+  s["edits"][0]["drag"]["keys"][1]["time"] = 0.5;
+  expect_refused(s, "/edits/0/drag/keys/1/time");
+  s = walk_script();
+  s["edits"][0]["end"] = 0.2;
+  expect_refused(s, "/edits/0/end");
+  s = walk_script();
+  s["edits"][0]["pins"][0]["mode"] = "glue";
+  expect_refused(s, "/edits/0/pins/0/mode: 'glue'");
+  s = walk_script();
+  s["edits"][0]["start"] = 100.0;
+  s["edits"][0]["end"] = 101.0;
+  expect_refused(s, "/edits/0/start");
+  s = walk_script();
+  s["edits"][0]["drag"]["keys"][0]["position"] = {0, "up", 0};
+  expect_refused(s, "/edits/0/drag/keys/0/position/1: expected a number");
+  s = walk_script();
+  s["falloff"] = -1;
+  expect_refused(s, "/falloff");
+  expect_refused(json::array(), "expected an object");
+  // not JSON at all: the line and column
+  std::ofstream(script) << "{\"edits\": [";
+  const Outcome r = pindrag(dir, "edit " + walk() + " --script " + script + " -o " + out);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("edits.json:1:"), std::string::npos) << r.err;
+}
+
+TEST(EditScript, DragKeysInterpolateLinearlyAndHoldBeyondTheEnds) {
+  cli::ScriptDrag d;
+  d.keys = {{1.0, {0, 0, 0}}, {2.0, {0, 1, 0}}, {4.0, {0, 1, 2}}};
+  EXPECT_EQ(d.at(0.0), core::Vector3(0, 0, 0));
+  EXPECT_EQ(d.at(1.5), core::Vector3(0, 0.5, 0));
+  EXPECT_EQ(d.at(3.0), core::Vector3(0, 1, 1));
+  EXPECT_EQ(d.at(9.0), core::Vector3(0, 1, 2));
+}
+
+}  // namespace
