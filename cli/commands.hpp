@@ -11,7 +11,9 @@ void add_character_command(CLI::App& app);
 void add_solve_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_dynamics_command(CLI::App& app);
+void add_serve_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
 void add_edit_command(CLI::App& app);
+void add_thumbnail_command(CLI::App& app);
 
 }  // namespace cli

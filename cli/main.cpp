@@ -11,8 +11,10 @@ int main(int argc, char** argv) {
   cli::add_solve_command(app);
   cli::add_bench_command(app);
   cli::add_dynamics_command(app);
+  cli::add_serve_command(app);
   cli::add_convert_command(app);
   cli::add_edit_command(app);
+  cli::add_thumbnail_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

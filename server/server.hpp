@@ -1,0 +1,55 @@
+// The pindrag server: HTTP (cpp-httplib) on port P and the WebSocket (Boost.Beast) on P+1 over
+// one session registry. Binding happens in the constructor, so a port in use is reported at once;
+// start() runs both on their own threads; stop() shuts both down and stops every session actor
+// (each saves its last state). DESIGN.md §6, docs/protocol.md.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "server/session_registry.hpp"
+
+namespace server {
+
+struct ServerOptions {
+  std::string host = "127.0.0.1";  // loopback unless the operator says otherwise
+  int port = 8080;                 // 0: any free port
+  int ws_port = -1;                // -1: port + 1 (any free port when port is 0); 0: any free port
+  /// A bundled character name, or a character file offered to the page under its file name.
+  std::string character = "human48";
+  std::string data_dir;  // empty: sessions are kept in memory only
+  std::string web_root;  // empty: default_web_root()
+};
+
+/// The page's folder: $PINDRAG_WEB_ROOT, else the source tree's web/ recorded at build time.
+std::string default_web_root();
+
+class Server {
+ public:
+  /// Loads the character, restores saved sessions and binds both ports.
+  /// @throws std::runtime_error naming the address, the character or the folder that failed
+  explicit Server(const ServerOptions& options);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  void start();
+  /// Idempotent; returns when both threads have ended.
+  void stop();
+
+  int http_port() const;
+  int ws_port() const;
+  /// The page's URL, with ?character=NAME when the character is not the page's default.
+  std::string url() const;
+  /// How many saved sessions were restored at startup.
+  int restored_sessions() const;
+  SessionRegistry& registry();
+  std::size_t ws_connections() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace server

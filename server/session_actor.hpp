@@ -1,0 +1,155 @@
+// One actor per session: the only thread that touches its animator::Session (STYLE.md §8).
+//
+// Thread contract: every public function may be called from any thread; they only enqueue.
+// Commands (edits, subscriptions, calls from HTTP handlers) run in the order they were posted;
+// `drag_move` samples go into a latest-wins mailbox, so a burst of samples is applied as one.
+// A sample is flushed into the ordered queue when a command arrives after it, so a drag_end never
+// overtakes the drag_moves before it. The solver ticks only while Session::needs_tick() says
+// something moves, at most every kMinTickInterval, and immediately after a new drag sample.
+// The session is saved (atomically) after every committed edit and when the figure settles.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "animator/session.hpp"
+#include "server/protocol.hpp"
+
+namespace server {
+
+/// A WebSocket connection as the actor sees it. Called on the actor thread; must not block.
+class SessionSubscriber {
+ public:
+  virtual ~SessionSubscriber() = default;
+  /// A JSON text message; reliable and in order.
+  virtual void send_text(std::string message) = 0;
+  /// A binary pose frame; the connection keeps only the newest one not yet written.
+  virtual void send_pose(std::string frame) = 0;
+};
+
+/// Counters for tests and the benchmark.
+struct ActorStats {
+  std::uint64_t ticks = 0;
+  std::uint64_t drag_samples_received = 0;
+  std::uint64_t drag_samples_applied = 0;
+  std::uint64_t saves = 0;
+  std::uint64_t pose_frames = 0;
+};
+
+class SessionActor {
+ public:
+  /// Smallest wall time between two solver ticks (at most 500 ticks per second).
+  static constexpr std::chrono::microseconds kMinTickInterval{2000};
+  /// Wall time between ticks while playing or settling with no new drag sample.
+  static constexpr std::chrono::microseconds kTickPeriod{16667};
+
+  /// `save_path` empty: the session is not saved.
+  SessionActor(std::string id, std::unique_ptr<animator::Session> session, std::string save_path);
+  ~SessionActor();
+  SessionActor(const SessionActor&) = delete;
+  SessionActor& operator=(const SessionActor&) = delete;
+
+  const std::string& id() const { return id_; }
+  /// The session's model: immutable, safe to read from any thread.
+  const core::Model& model() const { return *model_; }
+
+  /// Adds a connection: it gets the snapshot, then pose frames and `state`/`report` messages.
+  void subscribe(std::uint64_t connection, std::shared_ptr<SessionSubscriber> subscriber);
+  void unsubscribe(std::uint64_t connection);
+  /// A decoded client message of `connection` (not `hello`).
+  void post(std::uint64_t connection, ClientMessage message);
+
+  /// Runs `f` on the actor thread and returns its result (exceptions are rethrown here).
+  /// `edit`: the call may change the document; then the session is saved and `state` sent.
+  template <class F>
+  auto call(F f, bool edit = false) -> decltype(f(std::declval<animator::Session&>())) {
+    using R = decltype(f(std::declval<animator::Session&>()));
+    auto promise = std::make_shared<std::promise<R>>();
+    auto future = promise->get_future();
+    const bool accepted = enqueue_call(
+        [promise, f = std::move(f)](animator::Session& s) mutable {
+          try {
+            if constexpr (std::is_void_v<R>) {
+              f(s);
+              promise->set_value();
+            } else {
+              promise->set_value(f(s));
+            }
+          } catch (...) {
+            promise->set_exception(std::current_exception());
+          }
+        },
+        edit);
+    if (!accepted) throw animator::SessionError("session " + id_ + ": the server is shutting down");
+    return future.get();
+  }
+
+  ActorStats stats() const;
+  /// Stops the thread after the commands already posted (saving if needed). Idempotent.
+  void stop();
+
+ private:
+  struct DragSample {
+    std::uint64_t connection = 0;
+    DragMove move;
+    std::vector<nlohmann::json> ack_ids;  // ids of this sample and of those it superseded
+  };
+  struct Item {
+    enum class Kind { kMessage, kDrag, kSubscribe, kUnsubscribe, kCall } kind = Kind::kMessage;
+    std::uint64_t connection = 0;
+    ClientMessage message;
+    DragSample drag;
+    std::shared_ptr<SessionSubscriber> subscriber;
+    std::function<void(animator::Session&)> call;
+    bool edit = false;
+  };
+
+  bool enqueue_call(std::function<void(animator::Session&)> f, bool edit);
+  bool enqueue(Item item);
+  void run();
+  void process(Item& item);
+  bool apply_drag(DragSample& sample);
+  void tick();
+  void broadcast_pose();
+  void broadcast_text(const std::string& text);
+  void send_to(std::uint64_t connection, std::string text);
+  void after_edit();
+  void save();
+
+  const std::string id_;
+  std::unique_ptr<animator::Session> session_;
+  std::shared_ptr<const core::Model> model_;
+  const std::string save_path_;
+
+  // shared with posting threads
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Item> queue_;
+  std::optional<DragSample> mailbox_;
+  bool stopping_ = false;
+  ActorStats stats_;
+
+  // actor thread only
+  std::map<std::uint64_t, std::shared_ptr<SessionSubscriber>> subscribers_;
+  std::map<std::uint64_t, std::uint32_t> last_seq_;
+  std::uint32_t frame_id_ = 0;
+  std::chrono::steady_clock::time_point last_tick_{};
+  std::chrono::steady_clock::time_point last_report_{};
+  bool was_moving_ = false;
+  bool pose_dirty_ = false;
+
+  std::thread thread_;
+};
+
+}  // namespace server

@@ -1,0 +1,545 @@
+// Integration tests of the server (server/server.hpp) over real sockets on ephemeral loopback
+// ports: the protocol end to end, the drag burst, reconnect and restart, and the security corpus.
+#include "server/server.hpp"
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "server/protocol.hpp"
+#include "tests/server/ws_test_client.hpp"
+
+namespace {
+
+using nlohmann::json;
+using server_test::WsClient;
+namespace fs = std::filesystem;
+
+// A web root of our own: the page, a script, three.js's layout, a secret beside it and a
+// symlink pointing out of it.
+fs::path make_web_root(const fs::path& base) {
+  const fs::path root = base / "web";
+  fs::create_directories(root / "js");
+  fs::create_directories(root / "node_modules" / "three" / "build");
+  std::ofstream(root / "index.html") << "<!doctype html><title>pindrag</title>";
+  std::ofstream(root / "js" / "main.js") << "export const ok = 1;";
+  std::ofstream(root / "node_modules" / "three" / "build" / "three.module.js") << "export const REVISION = '0';";
+  std::ofstream(root / "node_modules" / "three" / "package.json") << "{\"secret\": true}";
+  std::ofstream(base / "secret.txt") << "root:x:0:0:secret";
+  fs::create_symlink(base / "secret.txt", root / "link_out.txt");
+  return root;
+}
+
+class ServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    base_ = fs::temp_directory_path() /
+            ("pindrag-server-test-" + std::to_string(::getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(base_);
+    fs::create_directories(base_);
+    web_root_ = make_web_root(base_);
+    start();
+  }
+  void TearDown() override {
+    server_.reset();
+    std::error_code ec;
+    fs::remove_all(base_, ec);
+  }
+
+  void start() {
+    server::ServerOptions options;
+    options.port = 0;
+    options.ws_port = 0;
+    options.data_dir = (base_ / "data").string();
+    options.web_root = web_root_.string();
+    server_ = std::make_unique<server::Server>(options);
+    server_->start();
+  }
+  void restart() {
+    server_.reset();
+    start();
+  }
+
+  std::string origin() const { return "http://127.0.0.1:" + std::to_string(server_->http_port()); }
+  httplib::Client http() const {
+    httplib::Client c("127.0.0.1", server_->http_port());
+    c.set_read_timeout(30, 0);
+    return c;
+  }
+
+  struct Created {
+    std::string id, token;
+  };
+  Created create_session(const std::string& character = "human48") {
+    auto c = http();
+    const auto res = c.Post("/api/sessions", {{"Origin", origin()}}, json{{"character", character}}.dump(),
+                            "application/json");
+    EXPECT_TRUE(res);
+    if (!res) return {};
+    EXPECT_EQ(res->status, 201) << res->body;
+    const json j = json::parse(res->body);
+    return {j.at("id"), j.at("token")};
+  }
+  json snapshot(const Created& s) {
+    auto c = http();
+    const auto res = c.Get("/api/sessions/" + s.id, {{"X-Session-Token", s.token}});
+    EXPECT_TRUE(res);
+    EXPECT_EQ(res->status, 200) << res->body;
+    return json::parse(res->body);
+  }
+  std::unique_ptr<WsClient> connect(const Created& s) {
+    auto ws = std::make_unique<WsClient>(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin());
+    ws->send({{"type", "hello"}, {"protocol", 1}});
+    return ws;
+  }
+  // Sends a message with an id and waits for its ack; fails on an error reply.
+  void request(WsClient& ws, json message, int id) {
+    message["id"] = id;
+    ws.send(message);
+    for (;;) {
+      const server_test::WsMessage m = ws.read();
+      if (!m.text) continue;
+      const json j = m.json();
+      if (j.value("type", "") == "error" && j.value("id", -1) == id) FAIL() << j.dump();
+      if (j.value("type", "") == "ack" && j.value("id", -1) == id) {
+        EXPECT_EQ(j.at("request"), message.at("type"));
+        return;
+      }
+    }
+  }
+  std::shared_ptr<server::SessionActor> actor_of(const Created& s) {
+    return server_->registry().find(s.id, s.token).actor;
+  }
+
+  fs::path base_, web_root_;
+  std::unique_ptr<server::Server> server_;
+};
+
+TEST_F(ServerTest, HealthConfigAndCharacters) {
+  auto c = http();
+  auto res = c.Get("/api/health");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(json::parse(res->body).at("status"), "ok");
+
+  res = c.Get("/api/config");
+  ASSERT_TRUE(res);
+  const json config = json::parse(res->body);
+  EXPECT_EQ(config.at("protocol"), 1);
+  EXPECT_EQ(config.at("ws_url"), "ws://127.0.0.1:" + std::to_string(server_->ws_port()) + "/ws");
+  EXPECT_EQ(config.at("limits").at("upload_bytes"), 64 << 20);
+  EXPECT_EQ(config.at("limits").at("ws_message_bytes"), 1 << 20);
+
+  res = c.Get("/api/characters");
+  ASSERT_TRUE(res);
+  bool has_human = false;
+  for (const json& ch : json::parse(res->body)) has_human = has_human || ch.at("name") == "human48";
+  EXPECT_TRUE(has_human);
+
+  res = c.Get("/");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_NE(res->body.find("pindrag"), std::string::npos);
+  res = c.Get("/vendor/three/build/three.module.js");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->get_header_value("Content-Type").rfind("text/javascript", 0), 0u);
+}
+
+TEST_F(ServerTest, SnapshotOverHttpNeedsTheToken) {
+  const Created s = create_session();
+  const json snap = snapshot(s);
+  EXPECT_EQ(snap.at("character").at("name"), "human48");
+  const json& links = snap.at("links");
+  ASSERT_EQ(links.size(), snap.at("character").at("links").size());
+  ASSERT_GT(links.size(), 10u);
+  EXPECT_EQ(links[0].at("p").size(), 3u);
+  EXPECT_TRUE(snap.contains("pins") && snap.contains("keys") && snap.contains("clip") && snap.contains("settings"));
+
+  auto c = http();
+  auto res = c.Get("/api/sessions/" + s.id);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 401);
+  EXPECT_TRUE(json::parse(res->body).contains("error"));
+  res = c.Get("/api/sessions/" + s.id, {{"X-Session-Token", std::string(32, 'a')}});
+  EXPECT_EQ(res->status, 401);
+  res = c.Get("/api/sessions/" + std::string(32, 'b'), {{"X-Session-Token", s.token}});
+  EXPECT_EQ(res->status, 404);
+  res = c.Post("/api/sessions", {{"Origin", origin()}}, R"({"character": "/etc/passwd"})", "application/json");
+  EXPECT_EQ(res->status, 400);
+  EXPECT_NE(json::parse(res->body).at("error").get<std::string>().find("character"), std::string::npos);
+}
+
+TEST_F(ServerTest, ProtocolEndToEnd) {
+  const Created s = create_session();
+  auto ws = connect(s);
+  const json snap = ws->read_until("snapshot");
+  EXPECT_EQ(snap.at("session"), s.id);
+  EXPECT_EQ(snap.at("protocol"), 1);
+  const json& links = snap.at("links");
+
+  // the first pose frame agrees with the snapshot
+  server_test::PoseFrame pose;
+  for (;;) {
+    const auto m = ws->read();
+    if (!m.text) {
+      pose = server_test::decode_pose(m.data);
+      break;
+    }
+  }
+  EXPECT_EQ(pose.magic, server::kPoseMagic);
+  EXPECT_EQ(pose.version, 1);
+  ASSERT_EQ(pose.links, links.size());
+  EXPECT_EQ(pose.last_seq, 0u);
+  for (size_t i = 0; i < links.size(); ++i) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(pose.values[i][k], links[i].at("p")[k].get<double>(), 1e-5);
+  }
+
+  int hand = -1;
+  for (size_t i = 0; i < links.size(); ++i) {
+    if (links[i].at("name") == "r_hand") hand = static_cast<int>(i);
+  }
+  ASSERT_GE(hand, 0);
+  std::array<double, 3> start{};
+  for (int k = 0; k < 3; ++k) start[k] = links[hand].at("p")[k];
+
+  request(*ws, {{"type", "pin"}, {"link", "l_foot"}, {"mode", "pose"}}, 1);
+  const json state = ws->read_until("state");
+  ASSERT_EQ(state.at("pins").size(), 1u);
+  EXPECT_EQ(state.at("pins")[0].at("link"), "l_foot");
+  EXPECT_EQ(state.at("pins")[0].at("mode"), "pose");
+
+  // drag the right hand 10 cm forward and up
+  const std::array<double, 3> goal{start[0], start[1] + 0.1, start[2] + 0.1};
+  request(*ws, {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}}, 2);
+  for (std::uint32_t seq = 1; seq <= 30; ++seq) {
+    const double a = seq / 30.0;
+    ws->send({{"type", "drag_move"}, {"seq", seq},
+              {"target", {start[0], start[1] + 0.1 * a, start[2] + 0.1 * a}}});
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  // poses keep coming while the solver settles; wait until the hand is close to the goal
+  double distance = 1;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (distance > 0.01 && std::chrono::steady_clock::now() < deadline) {
+    const auto m = ws->read();
+    if (m.text) continue;
+    pose = server_test::decode_pose(m.data);
+    if (pose.last_seq != 30) continue;
+    distance = std::hypot(pose.values[hand][0] - goal[0], pose.values[hand][1] - goal[1], pose.values[hand][2] - goal[2]);
+  }
+  EXPECT_LT(distance, 0.01) << "the hand did not reach the drag target";
+  request(*ws, {{"type", "drag_end"}}, 3);
+  request(*ws, {{"type", "key_insert"}, {"time", 0.5}, {"interpolation", "linear"}}, 4);
+  json after_key = ws->read_until("state");
+  ASSERT_EQ(after_key.at("keys").size(), 1u);
+  EXPECT_EQ(after_key.at("keys")[0].at("interpolation"), "linear");
+  request(*ws, {{"type", "undo"}}, 5);
+  EXPECT_EQ(ws->read_until("state").at("keys").size(), 0u);
+  request(*ws, {{"type", "redo"}}, 6);
+  EXPECT_EQ(ws->read_until("state").at("keys").size(), 1u);
+  request(*ws, {{"type", "set_settings"}, {"settings", {{"iterations", 3}}}}, 7);
+
+  // refusals name the field and leave the session as it was
+  ws->send({{"type", "pin"}, {"link", "tail"}, {"id", 8}});
+  json error = ws->read_until("error");
+  EXPECT_EQ(error.at("id"), 8);
+  EXPECT_NE(error.at("message").get<std::string>().find("pin.link"), std::string::npos) << error.dump();
+  ws->send({{"type", "drag_move"}, {"seq", 31}, {"target", {0, "x", 0}}, {"id", 9}});
+  error = ws->read_until("error");
+  EXPECT_EQ(error.at("id"), 9);
+  EXPECT_NE(error.at("message").get<std::string>().find("drag_move.target"), std::string::npos);
+  ws->send({{"type", "teleport"}, {"id", 10}});
+  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("teleport"), std::string::npos);
+
+  // export of the keyed animation
+  auto c = http();
+  auto res = c.Get("/api/sessions/" + s.id + "/export?format=bvh", {{"X-Session-Token", s.token}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_EQ(res->body.rfind("HIERARCHY", 0), 0u);
+  EXPECT_NE(res->get_header_value("Content-Disposition").find("attachment; filename=\"human48.bvh\""), std::string::npos);
+  res = c.Get("/api/sessions/" + s.id + "/export?format=glb", {{"X-Session-Token", s.token}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->body.substr(0, 4), "glTF");
+  res = c.Get("/api/sessions/" + s.id + "/export?format=obj", {{"X-Session-Token", s.token}});
+  EXPECT_EQ(res->status, 400);
+}
+
+TEST_F(ServerTest, ThumbnailIsAPngOfTheAskedSize) {
+  const Created s = create_session();
+  auto c = http();
+  auto res = c.Get("/api/sessions/" + s.id + "/thumbnail.png?size=64", {{"X-Session-Token", s.token}});
+  ASSERT_TRUE(res);
+  if (res->status == 501) GTEST_SKIP() << "built without the thumbnail renderer";
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(res->get_header_value("Content-Type"), "image/png");
+  ASSERT_GT(res->body.size(), 24u);
+  EXPECT_EQ(res->body.substr(1, 3), "PNG");
+  // IHDR width and height, big-endian at bytes 16..23
+  auto be32 = [&](size_t at) {
+    return (static_cast<unsigned char>(res->body[at]) << 24) | (static_cast<unsigned char>(res->body[at + 1]) << 16) |
+           (static_cast<unsigned char>(res->body[at + 2]) << 8) | static_cast<unsigned char>(res->body[at + 3]);
+  };
+  EXPECT_EQ(be32(16), 64);
+  EXPECT_EQ(be32(20), 64);
+  for (const std::string& bad : std::vector<std::string>{"size=8", "size=2000", "size=abc", "frame=5"}) {
+    res = c.Get("/api/sessions/" + s.id + "/thumbnail.png?" + bad, {{"X-Session-Token", s.token}});
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 400) << bad;
+  }
+  res = c.Get("/api/sessions/" + s.id + "/thumbnail.png");
+  EXPECT_EQ(res->status, 401);
+}
+
+TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
+  const Created s = create_session();
+  auto ws = connect(s);
+  const json snap = ws->read_until("snapshot");
+  std::array<double, 3> start{};
+  for (const json& l : snap.at("links")) {
+    if (l.at("name") == "r_hand") {
+      for (int k = 0; k < 3; ++k) start[k] = l.at("p")[k];
+    }
+  }
+  request(*ws, {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}}, 0);
+  const auto actor = actor_of(s);
+  const server::ActorStats before = actor->stats();
+
+  constexpr int kBurst = 1000;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int seq = 1; seq <= kBurst; ++seq) {
+    const double a = 0.1 * seq / kBurst;
+    ws->send({{"type", "drag_move"}, {"seq", seq}, {"id", seq}, {"target", {start[0] + a, start[1], start[2] + a}}});
+  }
+  int next_ack = 1;
+  std::uint32_t newest_seq_seen = 0;
+  while (next_ack <= kBurst || newest_seq_seen < kBurst) {
+    const auto m = ws->read();
+    if (!m.text) {
+      newest_seq_seen = std::max(newest_seq_seen, server_test::decode_pose(m.data).last_seq);
+      continue;
+    }
+    const json j = m.json();
+    if (j.at("type") == "error") FAIL() << j.dump();
+    if (j.at("type") != "ack") continue;
+    ASSERT_EQ(j.at("id"), next_ack) << "acks out of order";
+    EXPECT_EQ(j.at("request"), "drag_move");
+    ++next_ack;
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const server::ActorStats after = actor->stats();
+  const auto applied = after.drag_samples_applied - before.drag_samples_applied;
+  const auto ticks = after.ticks - before.ticks;
+  EXPECT_EQ(after.drag_samples_received - before.drag_samples_received, static_cast<unsigned>(kBurst));
+  // superseded samples were dropped: far fewer applications and ticks than samples
+  EXPECT_LT(applied, 200u) << "applied " << applied;
+  EXPECT_LT(ticks, 200u) << "ticks " << ticks;
+  EXPECT_LT(seconds, 5.0);
+  std::cout << "burst of " << kBurst << " drag_moves: " << applied << " applied, " << ticks << " ticks, "
+            << seconds * 1e3 << " ms until the last ack\n";
+}
+
+TEST_F(ServerTest, ReconnectRestoresPinsKeysAndLayers) {
+  const Created s = create_session();
+  json last_state;
+  {
+    auto ws = connect(s);
+    const json snap = ws->read_until("snapshot");
+    std::array<double, 3> hand{};
+    for (const json& l : snap.at("links")) {
+      if (l.at("name") == "r_hand") {
+        for (int k = 0; k < 3; ++k) hand[k] = l.at("p")[k];
+      }
+    }
+    request(*ws, {{"type", "pin"}, {"link", "l_foot"}, {"mode", "position"}}, 1);
+    request(*ws, {{"type", "key_insert"}, {"time", 0.0}}, 2);
+    request(*ws, {{"type", "key_insert"}, {"time", 1.0}}, 3);
+    request(*ws, {{"type", "bake_keys"}, {"rate", 30}}, 4);
+    request(*ws, {{"type", "key_insert"}, {"time", 0.5}}, 5);
+    // an edit during playback becomes a layer
+    request(*ws, {{"type", "play"}}, 6);
+    request(*ws, {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", hand}}, 7);
+    for (std::uint32_t seq = 1; seq <= 10; ++seq) {
+      ws->send({{"type", "drag_move"}, {"seq", seq}, {"target", {hand[0], hand[1] + 0.01 * seq, hand[2]}}});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    request(*ws, {{"type", "drag_end"}}, 8);
+    request(*ws, {{"type", "pause"}}, 9);
+    request(*ws, {{"type", "undo"}}, 10);  // the undo history is part of what comes back too
+    request(*ws, {{"type", "redo"}}, 11);
+    last_state = ws->read_until("state");
+    ws->close();
+  }
+  ASSERT_EQ(last_state.at("pins").size(), 1u);
+  ASSERT_GE(last_state.at("keys").size(), 1u);
+  ASSERT_GE(last_state.at("layers").size(), 1u) << "the drag during playback made no layer";
+
+  auto ws = connect(s);
+  const json again = ws->read_until("snapshot");
+  EXPECT_EQ(again.at("pins"), last_state.at("pins"));
+  EXPECT_EQ(again.at("keys"), last_state.at("keys"));
+  EXPECT_EQ(again.at("layers"), last_state.at("layers"));
+  EXPECT_EQ(again.at("clip"), last_state.at("clip"));
+  EXPECT_EQ(again.at("undo"), last_state.at("undo"));
+}
+
+TEST_F(ServerTest, RestartRestoresSessions) {
+  const Created s = create_session();
+  {
+    auto ws = connect(s);
+    ws->read_until("snapshot");
+    request(*ws, {{"type", "pin"}, {"link", "l_foot"}, {"mode", "pose"}}, 1);
+    request(*ws, {{"type", "key_insert"}, {"time", 0.25}, {"interpolation", "step"}}, 2);
+    ws->close();
+  }
+  const json before = snapshot(s);
+  restart();
+  EXPECT_EQ(server_->restored_sessions(), 1);
+  const json after = snapshot(s);
+  EXPECT_EQ(after.at("pins"), before.at("pins"));
+  EXPECT_EQ(after.at("keys"), before.at("keys"));
+  EXPECT_EQ(after.at("q"), before.at("q"));
+  auto ws = connect(s);
+  EXPECT_EQ(ws->read_until("snapshot").at("pins").size(), 1u);
+}
+
+TEST_F(ServerTest, BadHostIsRefused) {
+  auto c = http();
+  for (const std::string& host : std::vector<std::string>{"evil.example", "evil.example:" + std::to_string(server_->http_port()),
+                                  "127.0.0.1:1", "localhost.evil.example:" + std::to_string(server_->http_port())}) {
+    const auto res = c.Get("/api/health", {{"Host", host}});
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 403) << host;
+    EXPECT_TRUE(json::parse(res->body).contains("error"));
+  }
+  const auto ok = c.Get("/api/health", {{"Host", "localhost:" + std::to_string(server_->http_port())}});
+  EXPECT_EQ(ok->status, 200);
+  // the WebSocket checks the Host of its own port
+  const Created s = create_session();
+  EXPECT_THROW(WsClient(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin(), "evil.example"),
+               std::runtime_error);
+}
+
+TEST_F(ServerTest, EvilOriginIsRefused) {
+  const Created s = create_session();
+  const std::string target = "/ws?session=" + s.id + "&token=" + s.token;
+  for (const std::string& evil : std::vector<std::string>{"http://evil.example", "null", origin() + ".evil.example", "https://127.0.0.1:" +
+                                     std::to_string(server_->http_port())}) {
+    try {
+      WsClient ws(server_->ws_port(), target, evil);
+      ADD_FAILURE() << "upgrade accepted with Origin " << evil;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("status 403"), std::string::npos) << e.what();
+    }
+  }
+  try {
+    WsClient ws(server_->ws_port(), "/ws?session=" + s.id + "&token=" + std::string(32, '0'), origin());
+    ADD_FAILURE() << "upgrade accepted with a wrong token";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("status 401"), std::string::npos) << e.what();
+  }
+  auto c = http();
+  const auto res = c.Post("/api/sessions", {{"Origin", "http://evil.example"}}, R"({"character": "human48"})",
+                          "application/json");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 403);
+  // the right Origin and token connect
+  WsClient ws(server_->ws_port(), target, origin());
+}
+
+TEST_F(ServerTest, PathTraversalCorpusGets4xx) {
+  const std::string host = "Host: 127.0.0.1:" + std::to_string(server_->http_port()) + "\r\n";
+  for (const std::string& path : std::vector<std::string>{"/../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd", "/%2e%2e%2f%2e%2e%2fetc/passwd",
+        "/%5c..%5c..%5cetc%5cpasswd", "/js%5c..%5c..%5csecret.txt", "//etc/passwd", "/js/../../secret.txt",
+        "/js/%2e%2e/%2e%2e/secret.txt", "/link_out.txt", "/node_modules/three/package.json",
+        "/vendor/three/package.json", "/vendor/three/build/../../../secret.txt",
+        "/vendor/three/build/%2e%2e/%2e%2e/%2e%2e/secret.txt", "/.git/config", "/%00index.html",
+        "/etc/passwd", "/" + fs::absolute(base_ / "secret.txt").string(), "../secret.txt"}) {
+    const auto reply = server_test::raw_http(server_->http_port(),
+                                             "GET " + path + " HTTP/1.1\r\n" + host + "Connection: close\r\n\r\n");
+    EXPECT_GE(reply.status, 400) << path;
+    EXPECT_LT(reply.status, 500) << path;
+    EXPECT_EQ(reply.body.find("root:"), std::string::npos) << path;
+    EXPECT_EQ(reply.body.find("secret"), std::string::npos) << path;
+  }
+  auto c = http();
+  EXPECT_EQ(c.Get("/api/health")->status, 200);
+}
+
+TEST_F(ServerTest, OversizeUploadGets413) {
+  const Created s = create_session();
+  httplib::MultipartFormDataItems items{
+      {"clip", std::string((std::size_t{64} << 20) + (std::size_t{1} << 20), 'x'), "huge.bvh", "application/octet-stream"}};
+  auto c = http();
+  const auto res = c.Post("/api/sessions/" + s.id + "/clip", {{"X-Session-Token", s.token}, {"Origin", origin()}}, items);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 413);
+  // a small upload that is not a BVH is a 4xx naming the field
+  httplib::MultipartFormDataItems bad{{"clip", "HIERARCHY\nROOT x {\n", "broken.bvh", "text/plain"}};
+  const auto res2 = c.Post("/api/sessions/" + s.id + "/clip", {{"X-Session-Token", s.token}, {"Origin", origin()}}, bad);
+  ASSERT_TRUE(res2);
+  EXPECT_EQ(res2->status, 422);
+  EXPECT_NE(json::parse(res2->body).at("error").get<std::string>().find("clip"), std::string::npos);
+  EXPECT_EQ(c.Get("/api/health")->status, 200);
+}
+
+TEST_F(ServerTest, OversizeMessageClosesWith1009) {
+  const Created s = create_session();
+  auto ws = connect(s);
+  ws->read_until("snapshot");
+  ws->send_text(std::string((std::size_t{1} << 20) + 1, ' '));
+  bool closed = false;
+  try {
+    for (int k = 0; k < 1000; ++k) ws->read();
+  } catch (const std::runtime_error&) {
+    closed = true;
+  }
+  EXPECT_TRUE(closed);
+  EXPECT_EQ(ws->close_code(), 1009);
+  // the server goes on
+  auto again = connect(s);
+  EXPECT_EQ(again->read_until("snapshot").at("session"), s.id);
+}
+
+TEST_F(ServerTest, MalformedMessagesGetErrorsAndTheServerSurvives) {
+  const Created s = create_session();
+  auto ws = connect(s);
+  ws->read_until("snapshot");
+  for (const std::string& text : std::vector<std::string>{"{", "[]", "42", "{\"type\": 7}", "{\"no_type\": 1}",
+                                 "{\"type\": \"drag_move\", \"seq\": -1, \"target\": [0, 0, 0]}",
+                                 "{\"type\": \"pin\", \"link\": \"l_foot\", \"mode\": \"glue\"}",
+                                 "{\"type\": \"seek\", \"time\": 1e400}"}) {
+    ws->send_text(text);
+    const json error = ws->read_until("error");
+    EXPECT_FALSE(error.at("message").get<std::string>().empty()) << text;
+  }
+  ws->send_binary(std::string("PDPF\x01\x00\xff\xff", 8));
+  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("binary"), std::string::npos);
+  // the connection still works
+  request(*ws, {{"type", "pin"}, {"link", "l_foot"}}, 99);
+  // an unknown protocol version closes with 1002
+  auto other = std::make_unique<WsClient>(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin());
+  other->send({{"type", "hello"}, {"protocol", 2}});
+  EXPECT_THROW(
+      for (int k = 0; k < 100; ++k) other->read(), std::runtime_error);
+  EXPECT_EQ(other->close_code(), 1002);
+  // a text frame that is not UTF-8 breaks the WebSocket protocol itself: close 1007 (RFC 6455)
+  auto garbled = connect(s);
+  garbled->read_until("snapshot");
+  garbled->send_text("\xff\xfe garbage");
+  EXPECT_THROW(
+      for (int k = 0; k < 100; ++k) garbled->read(), std::runtime_error);
+  EXPECT_EQ(garbled->close_code(), 1007);
+  auto c = http();
+  EXPECT_EQ(c.Get("/api/health")->status, 200);
+  EXPECT_EQ(connect(s)->read_until("snapshot").at("session"), s.id);
+}
+
+}  // namespace

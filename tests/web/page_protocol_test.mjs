@@ -1,0 +1,124 @@
+// The page against a protocol stub (no solver): it loads without errors and draws the figure; a drag
+// from a joint handle sends drag_begin, increasing drag_move seqs and drag_end and leaves the camera
+// alone; right-click and P send pin/unpin (also next to the pin gizmo); Space, I, Ctrl+Z and
+// Ctrl+Shift+Z send play, key_insert, undo and redo; a dropped connection comes back by itself and
+// asks for a new snapshot.
+// Usage: node tests/web/page_protocol_test.mjs
+
+import { test, after, before } from 'node:test';
+import assert from 'node:assert/strict';
+import path from 'node:path';
+import { outputDir } from './support/env.mjs';
+import { launchBrowser, openPage, dragMouse, canvasStats, settle } from './support/browser.mjs';
+import { startProtocolStub } from './support/protocol_stub.mjs';
+
+const out = outputDir('page_protocol');
+let browser;
+let stub;
+
+before(async () => {
+  browser = await launchBrowser();
+  stub = await startProtocolStub();
+});
+after(async () => {
+  await browser?.close();
+  await stub?.close();
+});
+
+const typesSince = (start) => stub.received.slice(start).map((m) => m.type);
+
+async function waitForMessage(predicate, start, what) {
+  const deadline = Date.now() + 5000;
+  while (Date.now() < deadline) {
+    const m = stub.received.slice(start).find(predicate);
+    if (m) return m;
+    await new Promise((r) => setTimeout(r, 20));
+  }
+  assert.fail(`the page did not send ${what}; it sent ${JSON.stringify(typesSince(start))}`);
+}
+
+test('the page loads, connects and draws the figure', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  assert.equal(await page.evaluate(() => window.pindrag.contextLost()), false, 'the WebGL context is lost');
+  const stats = await canvasStats(page);
+  assert.ok(stats.colours > 200, `the canvas has only ${stats.colours} colours`);
+  assert.ok(stats.luminanceStd > 5, `the canvas is nearly flat (luminance std ${stats.luminanceStd.toFixed(2)})`);
+  assert.ok(stub.received.some((m) => m.type === 'hello' && m.protocol === 1), 'no hello with protocol 1');
+  await page.screenshot({ path: path.join(out, 'loaded.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('dragging the right hand sends absolute targets with increasing seq and leaves the camera alone', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const cameraBefore = await page.evaluate(() => window.pindrag.camera());
+  const hand = await page.evaluate(() => window.pindrag.project('r_hand'));
+  assert.ok(hand && hand.visible, 'the right hand is not on screen');
+  const start = stub.received.length;
+  await dragMouse(page, hand, { x: hand.x + 120, y: hand.y - 90 });
+  const end = await waitForMessage((m) => m.type === 'drag_end', start, 'drag_end');
+  const sent = stub.received.slice(start, stub.received.indexOf(end) + 1);
+  assert.equal(sent[0].type, 'drag_begin');
+  assert.equal(sent[0].link, 'r_hand');
+  const moves = sent.filter((m) => m.type === 'drag_move');
+  assert.ok(moves.length >= 3, `only ${moves.length} drag_move messages`);
+  for (let k = 1; k < moves.length; k++) assert.ok(moves[k].seq > moves[k - 1].seq, 'seq does not increase');
+  const first = sent[0].target;
+  const lastTarget = moves[moves.length - 1].target;
+  const moved = Math.hypot(...lastTarget.map((x, k) => x - first[k]));
+  assert.ok(moved > 0.1, `the drag target moved only ${moved.toFixed(3)} m`);
+  // constant depth: the target stays on the camera-facing plane through the grabbed point
+  const cam = cameraBefore.position;
+  const dir = cameraBefore.target.map((x, k) => x - cam[k]);
+  const depth = (p) => p.reduce((s, x, k) => s + (x - cam[k]) * dir[k], 0) / Math.hypot(...dir);
+  assert.ok(Math.abs(depth(lastTarget) - depth(first)) < 0.02, 'the drag target left the constant-depth plane');
+  assert.deepEqual(await page.evaluate(() => window.pindrag.camera()), cameraBefore, 'the camera moved during a joint drag');
+  await page.screenshot({ path: path.join(out, 'after_drag.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('pins, playback, keys and undo/redo go out as protocol messages', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const foot = await page.evaluate(() => window.pindrag.project('l_foot'));
+  let start = stub.received.length;
+  await page.mouse.click(foot.x, foot.y, { button: 'right' });
+  const pin = await waitForMessage((m) => m.type === 'pin', start, 'pin');
+  assert.equal(pin.link, 'l_foot');
+  await page.waitForFunction(() => window.pindrag.session.pins.length === 1);
+  assert.equal(await page.locator('#pin-list li[data-link="l_foot"]').count(), 1, 'the pin list does not show the pin');
+  // the pinned foot is selected, so the pin gizmo sits on it; its arrows must not hide the other foot
+  const otherFoot = await page.evaluate(() => window.pindrag.project('r_foot'));
+  start = stub.received.length;
+  await page.mouse.click(otherFoot.x, otherFoot.y, { button: 'right' });
+  assert.equal((await waitForMessage((m) => m.type === 'pin', start, 'a pin of the other foot')).link, 'r_foot');
+
+  start = stub.received.length;
+  await page.mouse.move(foot.x, foot.y);
+  await page.keyboard.press('p');
+  assert.equal((await waitForMessage((m) => m.type === 'unpin', start, 'unpin')).link, 'l_foot');
+
+  start = stub.received.length;
+  await page.keyboard.press('Space');
+  await waitForMessage((m) => m.type === 'play', start, 'play');
+  await page.keyboard.press('i');
+  await waitForMessage((m) => m.type === 'key_insert', start, 'key_insert');
+  await page.waitForSelector('#tl-track .key');
+  await page.keyboard.press('Control+z');
+  await waitForMessage((m) => m.type === 'undo', start, 'undo');
+  await page.keyboard.press('Control+Shift+z');
+  await waitForMessage((m) => m.type === 'redo', start, 'redo');
+  await page.screenshot({ path: path.join(out, 'key.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a dropped connection reconnects and says hello again', async () => {
+  const { page, context } = await openPage(browser, stub.url);
+  const start = stub.received.length;
+  stub.dropConnections();
+  await waitForMessage((m) => m.type === 'hello', start, 'a new hello after the drop');
+  await page.waitForFunction(() => window.pindrag.connection === 'open');
+  await settle(page);
+  await context.close();
+});

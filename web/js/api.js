@@ -1,0 +1,83 @@
+// The HTTP side of docs/protocol.md: configuration, sessions, clip upload and export downloads.
+// Every request that reads or changes a session carries its token (X-Session-Token).
+
+async function errorText(res) {
+  try {
+    const body = await res.json();
+    if (body && body.error) return `${res.status}: ${body.error}`;
+  } catch {
+    /* not JSON */
+  }
+  return `${res.status} ${res.statusText}`;
+}
+
+export function createApi() {
+  const api = {
+    sessionId: null,
+    token: null,
+
+    async config() {
+      const res = await fetch('/api/config', { cache: 'no-store' });
+      if (!res.ok) throw new Error(`GET /api/config: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    async createSession(character = 'human48') {
+      const res = await fetch('/api/sessions', {
+        method: 'POST',
+        headers: { 'Content-Type': 'application/json' },
+        body: JSON.stringify({ character }),
+      });
+      if (!res.ok) throw new Error(`POST /api/sessions: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    headers() {
+      return { 'X-Session-Token': api.token };
+    },
+
+    async snapshot() {
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}`, {
+        headers: api.headers(),
+        cache: 'no-store',
+      });
+      if (!res.ok) throw new Error(`GET session: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    async uploadClip(file) {
+      const form = new FormData();
+      form.append('clip', file, file.name);
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip`, {
+        method: 'POST',
+        headers: api.headers(),
+        body: form,
+      });
+      if (!res.ok) throw new Error(`clip upload: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    /** Fetches an export and hands it to the browser as a download with the server's file name. */
+    async exportDownload(format) {
+      const res = await fetch(
+        `/api/sessions/${encodeURIComponent(api.sessionId)}/export?format=${encodeURIComponent(format)}`,
+        { headers: api.headers(), cache: 'no-store' },
+      );
+      if (!res.ok) throw new Error(`export ${format}: ${await errorText(res)}`);
+      const blob = await res.blob();
+      const disposition = res.headers.get('Content-Disposition') || '';
+      const match = /filename\*?=(?:UTF-8'')?"?([^";]+)"?/i.exec(disposition);
+      const name = match ? decodeURIComponent(match[1]) : `pindrag.${format}`;
+      const url = URL.createObjectURL(blob);
+      const a = document.createElement('a');
+      a.href = url;
+      a.download = name;
+      document.body.appendChild(a);
+      a.click();
+      a.remove();
+      setTimeout(() => URL.revokeObjectURL(url), 10000);
+      return { name, bytes: blob.size };
+    },
+  };
+  return api;
+}

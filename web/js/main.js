@@ -1,0 +1,159 @@
+// Boots the page: reads /api/config, opens (or resumes) a session, builds the views and panels and
+// connects the WebSocket. Also exposes `window.pindrag`, a small read-only handle that the browser
+// tests (and curious users in the console) use to find the session and where links are on screen.
+
+import { createState, linkLabel } from './state.js';
+import { createApi } from './api.js';
+import { createConnection } from './connection.js';
+import { createActions } from './actions.js';
+import { createViewport } from './viewport.js';
+import { createSkeletonView } from './skeleton_view.js';
+import { createLimitsView } from './limits_view.js';
+import { createPinsView } from './pins_view.js';
+import { createDragControls } from './drag_controls.js';
+import { createToolbar } from './panel_toolbar.js';
+import { createTimelinePanel } from './panel_timeline.js';
+import { createSelectionPanel } from './panel_selection.js';
+import { createSettingsPanel } from './panel_settings.js';
+import { createStatusPanel } from './panel_status.js';
+import { createToasts } from './panel_toasts.js';
+import { createHelpOverlay } from './panel_help.js';
+import { createViewOptions } from './panel_view_options.js';
+import { bindKeyboard } from './keyboard.js';
+
+const SESSION_STORAGE_KEY = 'pindrag.session';
+
+/** Resumes the session of this tab (after a reload) or creates a new one. */
+async function openSession(api, character) {
+  const saved = JSON.parse(sessionStorage.getItem(SESSION_STORAGE_KEY) || 'null');
+  if (saved && saved.id && saved.token && !character) {
+    api.sessionId = saved.id;
+    api.token = saved.token;
+    try {
+      await api.snapshot();
+      return saved;
+    } catch {
+      /* gone (server data dir wiped) or token refused: start afresh */
+    }
+  }
+  const created = await api.createSession(character || 'human48');
+  api.sessionId = created.id;
+  api.token = created.token;
+  sessionStorage.setItem(SESSION_STORAGE_KEY, JSON.stringify({ id: created.id, token: created.token }));
+  return created;
+}
+
+function showFatal(message) {
+  const box = document.createElement('div');
+  box.className = 'fatal';
+  box.textContent = message;
+  document.body.appendChild(box);
+}
+
+async function main() {
+  const state = createState();
+  const api = createApi();
+  const params = new URLSearchParams(location.search);
+
+  let config;
+  try {
+    config = await api.config();
+    const session = await openSession(api, params.get('character'));
+    state.sessionId = session.id;
+    state.token = session.token;
+  } catch (err) {
+    showFatal(`Could not start a session: ${err.message}`);
+    throw err;
+  }
+  state.config = config;
+
+  const connection = createConnection(state, config.ws_url);
+  const actions = createActions(state, connection);
+
+  const viewport = createViewport(state);
+  document.getElementById('stage').appendChild(viewport.element);
+  const skeleton = createSkeletonView(state, viewport);
+  createLimitsView(state, viewport, skeleton);
+  const pins = createPinsView(state, viewport, skeleton, connection);
+  const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
+
+  document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions));
+  document.getElementById('timeline').appendChild(createTimelinePanel(state, connection, actions));
+  const sidebar = document.getElementById('sidebar');
+  sidebar.append(
+    createSelectionPanel(state, actions, skeleton),
+    createSettingsPanel(state, connection),
+    createStatusPanel(state, connection),
+  );
+  document.getElementById('stage').append(createViewOptions(state, viewport), createToasts(state), createHelpOverlay(state));
+  bindKeyboard(state, actions, drag, viewport, skeleton);
+
+  showCharacterInTitle(state);
+  viewport.resize();
+  connection.start();
+
+  // The test and console handle. Everything here reads; changes go through the UI or the protocol.
+  let poseFrames = 0;
+  state.signals.poseChanged.add(() => poseFrames++);
+  window.pindrag = {
+    get sessionId() {
+      return state.sessionId;
+    },
+    get token() {
+      return state.token;
+    },
+    get connection() {
+      return state.connection;
+    },
+    get session() {
+      return state.session;
+    },
+    get poseFrames() {
+      return poseFrames;
+    },
+    get lastPose() {
+      return state.pose ? { frame: state.pose.frame, ack: state.pose.ack, time: state.pose.time } : null;
+    },
+    get timeCursor() {
+      return state.timeCursor;
+    },
+    get renders() {
+      return viewport.stats.renders;
+    },
+    linkNames: () => (state.character ? state.character.links.map((l) => l.name) : []),
+    /** Client (CSS pixel) coordinates of a link's pivot as drawn now. */
+    project(name) {
+      const i = state.linkIndex.get(name);
+      const w = i === undefined ? null : skeleton.linkWorld(i);
+      if (!w) return null;
+      const s = viewport.toClient(w.position);
+      return { x: s.x, y: s.y, visible: s.visible };
+    },
+    /** Client (CSS pixel) coordinates of a world point. */
+    projectPoint(p) {
+      const s = viewport.toClient({ x: p[0], y: p[1], z: p[2] });
+      return { x: s.x, y: s.y, visible: s.visible };
+    },
+    /** World position of a link's pivot as drawn now. */
+    linkPosition(name) {
+      const i = state.linkIndex.get(name);
+      const w = i === undefined ? null : skeleton.linkWorld(i);
+      return w ? w.position.toArray() : null;
+    },
+    camera: () => ({
+      position: viewport.camera.position.toArray(),
+      target: viewport.controls.target.toArray(),
+      quaternion: viewport.camera.quaternion.toArray(),
+    }),
+    contextLost: () => viewport.renderer.getContext().isContextLost(),
+    label: (i) => linkLabel(state, i),
+  };
+}
+
+function showCharacterInTitle(state) {
+  state.signals.characterLoaded.add((c) => {
+    document.title = `pindrag · ${c.name}`;
+  });
+}
+
+main();
