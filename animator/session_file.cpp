@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/io/atomic_file.hpp"
 #include "core/configuration.hpp"
 #include "core/io/character_json.hpp"
 
@@ -252,32 +253,10 @@ std::unique_ptr<Session> session_from_json(const json& j, const std::string& sou
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string tmp = (dir / ("." + target.filename().string() + ".XXXXXX")).string();
-  const int fd = mkstemp(tmp.data());
-  if (fd < 0) throw SessionError(path + ": cannot create a temporary file: " + std::strerror(errno));
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const std::string e = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      throw SessionError(path + ": write failed: " + e);
-    }
-    written += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    ::unlink(tmp.c_str());
-    throw SessionError(path + ": could not flush the file to disk");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string e = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw SessionError(path + ": rename failed: " + e);
+  try {
+    core::io::write_file_atomically(path, bytes);
+  } catch (const std::system_error& e) {
+    throw SessionError(e.what());
   }
 }
 

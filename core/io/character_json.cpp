@@ -22,6 +22,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/io/atomic_file.hpp"
 #include "core/model_builder.hpp"
 
 namespace core::io {
@@ -1363,10 +1364,6 @@ Node joint_node(const Model& m, int i) {
   return j;
 }
 
-std::system_error io_error(int err, const std::string& what) {
-  return std::system_error(std::error_code(err, std::generic_category()), what);
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -1584,59 +1581,7 @@ std::string write_character_json(const Model& m) {
 }
 
 void save_character_json_file(const Model& model, const std::string& path) {
-  namespace fs = std::filesystem;
-  const std::string text = write_character_json(model);
-  const fs::path target(path);
-  if (target.filename().empty()) throw io_error(EISDIR, path + ": not a file name");
-  const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-
-  // a fresh temporary file beside the target, so the rename stays on one file system
-  std::random_device rd;
-  std::string tmp;
-  int fd = -1;
-  for (int attempt = 0; attempt < 16 && fd < 0; ++attempt) {
-    char suffix[32];
-    std::snprintf(suffix, sizeof suffix, ".tmp-%08x%08x", rd(), rd());
-    tmp = (dir / ("." + target.filename().string() + suffix)).string();
-    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0 && errno != EEXIST) {
-      throw io_error(errno, path + ": cannot create the temporary file " + tmp);
-    }
-  }
-  if (fd < 0) throw io_error(EEXIST, path + ": cannot find a free temporary file name");
-
-  auto fail = [&](const std::string& what) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw io_error(err, path + ": " + what);
-  };
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t w = ::write(fd, text.data() + done, text.size() - done);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      fail("write failed");
-    }
-    done += static_cast<size_t>(w);
-  }
-  if (::fsync(fd) != 0) fail("fsync failed");
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw io_error(err, path + ": close failed");
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw io_error(err, path + ": cannot rename " + tmp + " over it");
-  }
-  // make the rename itself durable
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
+  write_file_atomically(path, write_character_json(model));
 }
 
 }  // namespace core::io
