@@ -10,9 +10,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/io/atomic_file.hpp"
+#include "io/atomic_file.hpp"
 #include "core/configuration.hpp"
-#include "core/io/character_json.hpp"
+#include "io/character_json.hpp"
 
 namespace animator {
 
@@ -164,7 +164,7 @@ json session_to_json(const Session& session, bool include_character) {
       {"format", "pindrag-session"},
       {"version", kSessionFormatVersion},
       {"character_name", session.character()},
-      {"character", include_character ? json::parse(core::io::write_character_json(m)) : json(nullptr)},
+      {"character", include_character ? json::parse(io::write_character_json(m)) : json(nullptr)},
       {"q", vec(d.q)},
       {"pins", pins},
       {"keys", keys},
@@ -189,8 +189,8 @@ std::unique_ptr<Session> session_from_json(const json& j, const std::string& sou
     throw SessionError(source + ": session format version " + j.value("version", json(0)).dump() +
                        " is not supported (expected " + std::to_string(kSessionFormatVersion) + ")");
   }
-  const core::io::LoadResult loaded =
-      core::io::load_character_json_string(at(j, "character", "").dump(), source + "#/character", "");
+  const io::LoadResult loaded =
+      io::load_character_json_string(at(j, "character", "").dump(), source + "#/character", "");
   const core::Model& m = *loaded.model;
   const std::string name = j.value("character_name", m.name);
   auto session = std::make_unique<Session>(loaded.model, name);
@@ -254,7 +254,7 @@ std::unique_ptr<Session> session_from_json(const json& j, const std::string& sou
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {
   try {
-    core::io::write_file_atomically(path, bytes);
+    io::write_file_atomically(path, bytes);
   } catch (const std::system_error& e) {
     throw SessionError(e.what());
   }

@@ -13,8 +13,8 @@
 
 #include "animator/edit_layer.hpp"
 #include "animator/motion_editor.hpp"
-#include "core/io/bvh.hpp"
-#include "core/io/gltf.hpp"
+#include "io/bvh.hpp"
+#include "io/gltf.hpp"
 #include "core/kinematics.hpp"
 
 namespace {
@@ -37,7 +37,7 @@ std::string read_text(const std::string& path) {
 void bvh_parse(benchmark::State& state, const std::string& path) {
   const std::string text = read_text(path);
   for (auto _ : state) {
-    core::io::BvhDocument doc = core::io::parse_bvh(text, path);
+    io::BvhDocument doc = io::parse_bvh(text, path);
     benchmark::DoNotOptimize(doc.values.data());
   }
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(text.size()));
@@ -45,12 +45,12 @@ void bvh_parse(benchmark::State& state, const std::string& path) {
 
 // the whole export of an imported clip: rotations to Euler angles (unwrapped) and the text
 void bvh_write(benchmark::State& state, const std::string& path) {
-  const core::io::BvhImport imp = core::io::load_bvh_file(path);
-  core::io::BvhExportOptions o;
+  const io::BvhImport imp = io::load_bvh_file(path);
+  io::BvhExportOptions o;
   o.layout = &imp.layout;
   std::size_t bytes = 0;
   for (auto _ : state) {
-    const std::string text = core::io::write_bvh(*imp.model, imp.clip, o);
+    const std::string text = io::write_bvh(*imp.model, imp.clip, o);
     bytes = text.size();
     benchmark::DoNotOptimize(text.data());
   }
@@ -59,16 +59,16 @@ void bvh_write(benchmark::State& state, const std::string& path) {
 
 // a GLB in memory of the CMU walk's skeleton with `frames` frames (the walk repeated)
 void gltf_export(benchmark::State& state, const std::string& path) {
-  const core::io::BvhImport imp = core::io::load_bvh_file(path);
+  const io::BvhImport imp = io::load_bvh_file(path);
   core::Clip clip;
   clip.frame_time = imp.clip.frame_time;
   const auto frames = static_cast<std::size_t>(state.range(0));
   for (std::size_t k = 0; k < frames; ++k) clip.frames.push_back(imp.clip.frames[k % imp.clip.frames.size()]);
-  core::io::GltfExportOptions o;
+  io::GltfExportOptions o;
   o.stick_figure = true;
   std::size_t bytes = 0;
   for (auto _ : state) {
-    const auto glb = core::io::write_glb(*imp.model, &clip, nullptr, o);
+    const auto glb = io::write_glb(*imp.model, &clip, nullptr, o);
     bytes = glb.size();
     benchmark::DoNotOptimize(glb.data());
   }
@@ -84,7 +84,7 @@ struct EditLinks {
 // every frame of the clip edited in motion: four moving pins (the feet, the left hand and the head
 // follow the clip) while the right hand is dragged 12 cm off its path
 void edit_in_motion(benchmark::State& state, const std::string& path, const EditLinks& links) {
-  const core::io::BvhImport imp = core::io::load_bvh_file(path);
+  const io::BvhImport imp = io::load_bvh_file(path);
   const core::Model& m = *imp.model;
   const core::Clip& clip = imp.clip;
   std::vector<animator::Pin> pins;

@@ -7,7 +7,7 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include "core/human_figure.hpp"
-#include "core/io/urdf.hpp"
+#include "io/urdf.hpp"
 
 #ifndef PINDRAG_BENCH_MODELS_DIR
 #define PINDRAG_BENCH_MODELS_DIR ""
@@ -34,19 +34,19 @@ const std::vector<BenchModel>& models() {
     auto file = [&](const std::string& f) {
       return std::filesystem::exists(dir + "/" + f) ? dir + "/" + f : std::string();
     };
-    core::io::LoadOptions free_root;
-    free_root.root = core::io::RootJoint::kFree;
+    io::LoadOptions free_root;
+    free_root.root = io::RootJoint::kFree;
     for (const char* h : {"human48", "human34"}) {
       const std::string urdf = file(std::string(h) + ".urdf");
       if (urdf.empty()) continue;
-      out.push_back({std::string(h) + "_urdf", core::io::load_urdf_file(urdf, free_root).model,
+      out.push_back({std::string(h) + "_urdf", io::load_urdf_file(urdf, free_root).model,
                      file(std::string(h) + "_free.xml"), file(std::string(h) + "_float6.urdf")});
     }
     for (int n : {8, 32, 64, 128, 512}) {
       const std::string base = "chain" + std::to_string(n);
       const std::string urdf = file(base + ".urdf");
       if (urdf.empty()) continue;
-      out.push_back({base, core::io::load_urdf_file(urdf).model, file(base + ".xml"), urdf});
+      out.push_back({base, io::load_urdf_file(urdf).model, file(base + ".xml"), urdf});
     }
     return out;
   }();

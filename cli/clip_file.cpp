@@ -6,8 +6,8 @@
 #include <stdexcept>
 
 #include "core/configuration.hpp"
-#include "core/io/assimp_import.hpp"
-#include "core/io/gltf.hpp"
+#include "io/assimp_import.hpp"
+#include "io/gltf.hpp"
 #include "core/model_builder.hpp"
 
 namespace cli {
@@ -27,7 +27,7 @@ std::string lower_extension(const std::string& path) {
 // most frames a resampled clip may have (as the BVH reader's limit)
 [[noreturn]] void refuse(const std::string& message) { throw core::ModelError({message}); }
 
-constexpr double kMaxResampledFrames = static_cast<double>(core::io::kMaxBvhFrames);
+constexpr double kMaxResampledFrames = static_cast<double>(io::kMaxBvhFrames);
 
 }  // namespace
 
@@ -58,7 +58,7 @@ core::Clip resample(const core::Model& model, const core::Clip& clip, double fps
   if (last + 1 > kMaxResampledFrames) {
     throw std::invalid_argument("--fps: resampling at " + std::to_string(fps) +
                                 " fps would make more than " +
-                                std::to_string(core::io::kMaxBvhFrames) + " frames");
+                                std::to_string(io::kMaxBvhFrames) + " frames");
   }
   const int n = static_cast<int>(last) + 1;
   out.frames.resize(static_cast<std::size_t>(n));
@@ -79,10 +79,10 @@ ClipFile read_clip_file(const std::string& path, const ClipReadOptions& options)
   }
   ClipFile out;
   if (*format == ClipFormat::kBvh) {
-    core::io::BvhImportOptions o;
+    io::BvhImportOptions o;
     o.scale = options.bvh_scale;
     o.progress = options.progress;
-    core::io::BvhImport imp = core::io::load_bvh_file(path, o);
+    io::BvhImport imp = io::load_bvh_file(path, o);
     out.model = imp.model;
     out.clip = std::move(imp.clip);
     out.bvh_layout = std::move(imp.layout);
@@ -91,10 +91,10 @@ ClipFile read_clip_file(const std::string& path, const ClipReadOptions& options)
     if (options.fps) out.clip = resample(*out.model, out.clip, *options.fps);
     return out;
   }
-  core::io::ImportOptions o;
+  io::ImportOptions o;
   if (options.fps) o.frame_rate = *options.fps;
   if (options.progress) options.progress(0.0);
-  core::io::SkinnedImport imp = core::io::import_skinned_file(path, {}, o);
+  io::SkinnedImport imp = io::import_skinned_file(path, {}, o);
   if (options.progress) options.progress(1.0);
   out.model = imp.model;
   out.skin = std::make_shared<const core::SkinnedMesh>(std::move(imp.mesh));
@@ -123,21 +123,21 @@ void write_clip_file(const std::string& path, const ClipFile& source, const core
                                        "must be .bvh, .gltf or .glb)");
   }
   if (*format == ClipFormat::kBvh) {
-    core::io::BvhExportOptions o;
+    io::BvhExportOptions o;
     o.rotation_order = options.bvh_order;
     o.scale = options.bvh_scale;
     o.layout = source.bvh_layout ? &*source.bvh_layout : nullptr;
     o.progress = options.progress;
-    core::io::save_bvh_file(*source.model, clip, path, o);
+    io::save_bvh_file(*source.model, clip, path, o);
     return;
   }
   if (options.bvh_order || options.bvh_scale) {
     throw std::invalid_argument(path + ": --order and --scale apply to BVH files only");
   }
-  core::io::GltfExportOptions o;
+  io::GltfExportOptions o;
   o.stick_figure = options.stick_figure && (!source.skin || source.skin->empty());
   if (options.progress) options.progress(0.0);
-  core::io::save_gltf_file(path, *source.model, &clip,
+  io::save_gltf_file(path, *source.model, &clip,
                            source.skin && !source.skin->empty() ? source.skin.get() : nullptr, o);
   if (options.progress) options.progress(1.0);
 }

@@ -1,6 +1,6 @@
-// Animation clip files for the CLI: BVH read and written by core/io/bvh.hpp, glTF/GLB written by
-// core/io/gltf.hpp, and skinned characters (.gltf, .glb, .fbx, .dae) read through the sandboxed
-// assimp import (core/io/assimp_import.hpp). The kind is chosen by the file extension.
+// Animation clip files for the CLI: BVH read and written by io/bvh.hpp, glTF/GLB written by
+// io/gltf.hpp, and skinned characters (.gltf, .glb, .fbx, .dae) read through the sandboxed
+// assimp import (io/assimp_import.hpp). The kind is chosen by the file extension.
 #pragma once
 
 #include <functional>
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/clip.hpp"
-#include "core/io/bvh.hpp"
+#include "io/bvh.hpp"
 #include "core/model.hpp"
 #include "core/skin.hpp"
 
@@ -27,7 +27,7 @@ bool writable(ClipFormat f);
 struct ClipFile {
   std::shared_ptr<const core::Model> model;
   core::Clip clip;
-  std::optional<core::io::BvhLayout> bvh_layout;      // BVH input: names, channel orders, scale
+  std::optional<io::BvhLayout> bvh_layout;      // BVH input: names, channel orders, scale
   std::shared_ptr<const core::SkinnedMesh> skin;      // skinned input: the mesh
   std::string clip_name;                              // the file's animation name (may be empty)
   int clips_in_file = 1;

@@ -8,7 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/character_json.hpp"
+#include "io/character_json.hpp"
 
 namespace cli {
 
@@ -71,7 +71,7 @@ void add_character_command(CLI::App& app) {
   cmd->callback([options, output] {
     try {
       const auto model = core::build_human_figure(*options);
-      core::io::save_character_json_file(*model, *output);
+      io::save_character_json_file(*model, *output);
       std::cout << "wrote " << *output << ": " << model->name << ", " << model->nv << " DOF, "
                 << model->nlinks() << " links, " << number(options->height) << " m, "
                 << number(model->total_mass()) << " kg\n";

@@ -7,7 +7,7 @@
 #include "cli/clip_file.hpp"
 #include "cli/commands.hpp"
 #include "cli/progress_bar.hpp"
-#include "core/io/bvh.hpp"
+#include "io/bvh.hpp"
 
 namespace cli {
 
@@ -28,7 +28,7 @@ void convert(const ConvertArgs& a) {
   const bool bvh_in = in_format == ClipFormat::kBvh, bvh_out = out_format == ClipFormat::kBvh;
   if (!a.order.empty()) {
     if (!bvh_out) throw std::invalid_argument("--order: applies to a BVH output only");
-    if (!core::io::parse_rotation_order(a.order)) {
+    if (!io::parse_rotation_order(a.order)) {
       throw std::invalid_argument("--order: '" + a.order + "' (rule: a permutation of X, Y, Z such as ZXY)");
     }
   }

@@ -3,7 +3,7 @@
 #include "cli/commands.hpp"
 #include "cli/dynamics_state.hpp"
 #include "cli/json_fields.hpp"
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 #include "core/model_edit.hpp"
 
 namespace cli {
@@ -25,9 +25,9 @@ void add_dynamics_command(CLI::App& app) {
   cmd->callback([file, state, fixed_base] {
     std::shared_ptr<const core::Model> model;
     try {
-      core::io::LoadOptions options;
-      if (*fixed_base) options.root = core::io::RootJoint::kFixed;
-      model = core::io::load_character(*file, options).model;
+      io::LoadOptions options;
+      if (*fixed_base) options.root = io::RootJoint::kFixed;
+      model = io::load_character(*file, options).model;
       // a loader that ignores the option (a generated or native character): weld it here
       if (*fixed_base) model = core::weld_root(model);
     } catch (const core::ModelError& e) {

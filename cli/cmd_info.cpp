@@ -5,7 +5,7 @@
 #include "cli/clip_file.hpp"
 #include "cli/commands.hpp"
 #include "core/bounds.hpp"
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 
 namespace cli {
 
@@ -68,7 +68,7 @@ void add_info_command(CLI::App& app) {
       if (clip_format(*file)) {
         out = clip_summary(*file);
       } else {
-        const core::io::LoadResult loaded = core::io::load_character(*file);
+        const io::LoadResult loaded = io::load_character(*file);
         out = character_summary(*loaded.model, loaded.warnings);
       }
     } catch (const core::ModelError& e) {

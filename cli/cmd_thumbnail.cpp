@@ -12,9 +12,9 @@
 
 #include "cli/commands.hpp"
 #include "core/configuration.hpp"
-#include "core/io/assimp_import.hpp"
-#include "core/io/bundled_characters.hpp"
-#include "core/io/bvh.hpp"
+#include "io/assimp_import.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/bvh.hpp"
 #include "server/thumbnail.hpp"
 
 namespace cli {
@@ -39,16 +39,16 @@ Subject load_subject(const std::string& file) {
   const std::string ext = lower_extension(file);
   Subject s;
   if (ext == ".bvh") {
-    core::io::BvhImport bvh = core::io::load_bvh_file(file);
+    io::BvhImport bvh = io::load_bvh_file(file);
     s.model = bvh.model;
     s.clip = std::move(bvh.clip);
   } else if (ext == ".glb" || ext == ".gltf" || ext == ".fbx" || ext == ".dae") {
-    core::io::SkinnedImport imported = core::io::import_skinned_file(file);
+    io::SkinnedImport imported = io::import_skinned_file(file);
     s.model = imported.model;
     s.skin = std::move(imported.mesh);
     if (!imported.clips.empty()) s.clip = std::move(imported.clips.front().clip);
   } else {
-    s.model = core::io::load_character(file).model;
+    s.model = io::load_character(file).model;
   }
   return s;
 }

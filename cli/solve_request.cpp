@@ -5,7 +5,7 @@
 
 #include "cli/json_fields.hpp"
 #include "core/configuration.hpp"
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 #include "core/kinematics.hpp"
 #include "ik/solver.hpp"
 
@@ -112,9 +112,9 @@ json run_solve_request(const json& r) {
   warn_unknown_keys(r, "", {"character", "frames", "dt", "settings", "drag", "drags", "pins",
                             "joint_references", "start"});
   if (!r.contains("character")) throw RequestError("/character: missing (a bundled name or a file)");
-  core::io::LoadResult loaded;
+  io::LoadResult loaded;
   try {
-    loaded = core::io::load_character(string(r["character"], "/character"));
+    loaded = io::load_character(string(r["character"], "/character"));
   } catch (const core::ModelError& e) {
     throw RequestError(std::string("/character: ") + e.what());
   }

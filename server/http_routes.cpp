@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "core/io/bundled_characters.hpp"
-#include "core/io/bvh.hpp"
-#include "core/io/gltf.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/bvh.hpp"
+#include "io/gltf.hpp"
 #include "server/protocol.hpp"
 #include "server/uploads.hpp"
 #if PINDRAG_HAVE_THUMBNAIL
@@ -150,7 +150,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
   });
   http.Get("/api/characters", [&ctx](const httplib::Request&, httplib::Response& res) {
     json list = json::array();
-    for (const auto& c : core::io::bundled_characters()) list.push_back({{"name", c.name}, {"description", c.description}});
+    for (const auto& c : io::bundled_characters()) list.push_back({{"name", c.name}, {"description", c.description}});
     if (!ctx.served_character_name.empty()) {
       list.push_back({{"name", ctx.served_character_name}, {"description", "the character this server was started with"}});
     }
@@ -175,12 +175,12 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
           session = session_from_file(ctx.served_character_path, name);
         }
         bool bundled = session != nullptr;
-        for (const auto& c : core::io::bundled_characters()) bundled = bundled || c.name == name;
+        for (const auto& c : io::bundled_characters()) bundled = bundled || c.name == name;
         if (!bundled) {
           return send_error(res, 400, "character: \"" + safe_file_name(name, "?") +
                                           "\" is not a bundled character (rule: a name from GET /api/characters; files are uploaded)");
         }
-        if (!session) session = std::make_unique<animator::Session>(core::io::load_character(name).model, name);
+        if (!session) session = std::make_unique<animator::Session>(io::load_character(name).model, name);
       }
       const SessionHandle handle = ctx.registry->create(std::move(session));
       send_json(res, 201, {{"id", handle.id}, {"token", handle.token}});
@@ -230,11 +230,11 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     const std::string file_name = safe_file_name(a.name, "animation") + "." + format;
     try {
       if (format == "bvh") {
-        set_uncompressed(res, core::io::write_bvh(actor->model(), a.clip), "text/plain; charset=utf-8");
+        set_uncompressed(res, io::write_bvh(actor->model(), a.clip), "text/plain; charset=utf-8");
       } else if (format == "gltf") {
-        res.set_content(core::io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}), "model/gltf+json");
+        res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}), "model/gltf+json");
       } else {
-        const std::vector<std::uint8_t> glb = core::io::write_glb(actor->model(), &a.clip, a.skin, {.name = a.name});
+        const std::vector<std::uint8_t> glb = io::write_glb(actor->model(), &a.clip, a.skin, {.name = a.name});
         res.set_content(std::string(glb.begin(), glb.end()), "model/gltf-binary");
       }
     } catch (const std::invalid_argument& e) {

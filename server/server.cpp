@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 #include "server/http_routes.hpp"  // includes httplib.h after Eigen
 #include "server/security.hpp"
 #include "server/uploads.hpp"
@@ -53,7 +53,7 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
 
   // the character: a bundled name, or a file the operator chose (checked now, loaded per session)
   bool bundled = false;
-  for (const auto& c : core::io::bundled_characters()) bundled = bundled || c.name == options.character;
+  for (const auto& c : io::bundled_characters()) bundled = bundled || c.name == options.character;
   if (!bundled) {
     if (!fs::is_regular_file(options.character)) {
       throw std::runtime_error("--character " + options.character + ": neither a bundled character nor a file");

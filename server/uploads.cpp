@@ -8,9 +8,9 @@
 #include <filesystem>
 #include <system_error>
 
-#include "core/io/assimp_import.hpp"
-#include "core/io/bvh.hpp"
-#include "core/io/model_file.hpp"
+#include "io/assimp_import.hpp"
+#include "io/bvh.hpp"
+#include "io/model_file.hpp"
 #include "server/security.hpp"
 
 namespace server {
@@ -83,13 +83,13 @@ bool same_skeleton(const core::Model& a, const core::Model& b) {
 std::unique_ptr<animator::Session> session_from_file(const std::string& path, const std::string& name) {
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
-    core::io::BvhImport imported = core::io::load_bvh_file(path);
+    io::BvhImport imported = io::load_bvh_file(path);
     auto session = std::make_unique<animator::Session>(imported.model, name);
     if (imported.clip.size() > 1) session->set_clip(std::move(imported.clip), "import clip");
     return session;
   }
   if (is_assimp_format(ext)) {
-    core::io::SkinnedImport imported = core::io::import_skinned_file(path);
+    io::SkinnedImport imported = io::import_skinned_file(path);
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_skin(std::make_shared<const core::SkinnedMesh>(std::move(imported.mesh)));
     if (!imported.clips.empty() && imported.clips.front().clip.size() > 1) {
@@ -97,7 +97,7 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path, co
     }
     return session;
   }
-  return std::make_unique<animator::Session>(core::io::load_model_file(path).model, name);
+  return std::make_unique<animator::Session>(io::load_model_file(path).model, name);
 }
 
 std::unique_ptr<animator::Session> session_from_upload(const std::string& field, const std::string& file_name,
@@ -130,11 +130,11 @@ core::Clip clip_from_upload(const std::string& field, const std::string& file_na
   core::Clip clip;
   try {
     if (ext == ".bvh") {
-      core::io::BvhImport imported = core::io::load_bvh_file(upload.file());
+      io::BvhImport imported = io::load_bvh_file(upload.file());
       clip_model = imported.model;
       clip = std::move(imported.clip);
     } else {
-      core::io::SkinnedImport imported = core::io::import_skinned_file(upload.file());
+      io::SkinnedImport imported = io::import_skinned_file(upload.file());
       if (imported.clips.empty()) throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
       clip_model = imported.model;
       clip = std::move(imported.clips.front().clip);

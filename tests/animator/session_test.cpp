@@ -13,7 +13,7 @@
 #include "animator/session_file.hpp"
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/bvh.hpp"
+#include "io/bvh.hpp"
 #include "core/kinematics.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
@@ -227,7 +227,7 @@ TEST(Session, EditingInMotionKeepsPinnedFeetAndLeavesOtherFramesUntouched) {
 // right hand is dragged 12 cm away from where the clip has it, for half a second of playback.
 TEST(Session, EditingInMotionOnARealCmuClipKeepsTheFeetWithinAMillimetre) {
   PINDRAG_REQUIRE_DATA_DIR();
-  const core::io::BvhImport imp = core::io::load_bvh_file(fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh");
+  const io::BvhImport imp = io::load_bvh_file(fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh");
   Session s(imp.model, "cmu_walk_cgspeed");
   const core::Model& m = s.model();
   const core::Clip& base = imp.clip;

@@ -12,9 +12,9 @@
 
 #include "cli/edit_script.hpp"
 #include "cli/json_fields.hpp"
-#include "core/io/bvh.hpp"
+#include "io/bvh.hpp"
 #include "core/kinematics.hpp"
-#include "tests/core/io/gltf_reader.hpp"
+#include "tests/io/gltf_reader.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {
@@ -49,10 +49,10 @@ std::string walk() { return fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh"; 
 
 // world positions (metres) of the named joints of a BVH document, every frame
 using Positions = std::map<std::string, std::vector<core::Vector3>>;
-Positions joint_positions(const core::io::BvhDocument& doc, double scale) {
+Positions joint_positions(const io::BvhDocument& doc, double scale) {
   Positions p;
   for (int f = 0; f < doc.frames; ++f) {
-    const auto poses = core::io::bvh_world_poses(doc, f);
+    const auto poses = io::bvh_world_poses(doc, f);
     for (std::size_t n = 0; n < doc.nodes.size(); ++n) {
       if (!doc.nodes[n].is_end_site()) p[doc.nodes[n].name].push_back(scale * poses[n].p);
     }
@@ -60,7 +60,7 @@ Positions joint_positions(const core::io::BvhDocument& doc, double scale) {
   return p;
 }
 
-core::io::BvhDocument read_bvh(const std::string& path) { return core::io::parse_bvh(slurp(path), path); }
+io::BvhDocument read_bvh(const std::string& path) { return io::parse_bvh(slurp(path), path); }
 
 TEST(ConvertCommand, BvhToGlbAndBackKeepsEveryJointsWorldPositions) {
   PINDRAG_REQUIRE_DATA_DIR();
@@ -73,11 +73,11 @@ TEST(ConvertCommand, BvhToGlbAndBackKeepsEveryJointsWorldPositions) {
   // back through the skinned import (the stick figure carries the skeleton)
   r = pindrag(dir, "convert " + glb + " " + bvh + " --fps 120 --scale 0.01");  // to centimetres
   ASSERT_EQ(r.status, 0) << r.err;
-  const core::io::BvhDocument src = read_bvh(walk()), back = read_bvh(bvh);
+  const io::BvhDocument src = read_bvh(walk()), back = read_bvh(bvh);
   ASSERT_EQ(back.frames, src.frames);
   EXPECT_NEAR(back.frame_time, src.frame_time, 1e-6);
-  const Positions a = joint_positions(src, core::io::kCmuUnit), b = joint_positions(back, 0.01);
-  const double height = core::io::bvh_rest_extent(src).height * core::io::kCmuUnit;
+  const Positions a = joint_positions(src, io::kCmuUnit), b = joint_positions(back, 0.01);
+  const double height = io::bvh_rest_extent(src).height * io::kCmuUnit;
   double worst = 0;
   for (const auto& [name, track] : a) {
     const auto it = b.find(name);
@@ -93,19 +93,19 @@ TEST(ConvertCommand, BvhToBvhWithOrderAndRate) {
   const std::string out = dir.path("walk_xyz.bvh");
   const Outcome r = pindrag(dir, "convert " + walk() + " " + out + " --order XYZ --fps 60");
   ASSERT_EQ(r.status, 0) << r.err;
-  const core::io::BvhDocument src = read_bvh(walk()), got = read_bvh(out);
+  const io::BvhDocument src = read_bvh(walk()), got = read_bvh(out);
   EXPECT_EQ(got.frames, 172);  // 343 frames of 1/120 s = 2.858 s → frames 0..171 at 60 fps
   EXPECT_NEAR(got.frame_time, 1.0 / 60, 1e-9);
   for (const auto& n : got.nodes) {
     if (n.is_end_site()) continue;
     const std::size_t r0 = n.channels.size() - 3;
-    EXPECT_EQ(n.channels[r0], core::io::BvhChannel::kXrotation) << n.name;
-    EXPECT_EQ(n.channels[r0 + 2], core::io::BvhChannel::kZrotation) << n.name;
+    EXPECT_EQ(n.channels[r0], io::BvhChannel::kXrotation) << n.name;
+    EXPECT_EQ(n.channels[r0 + 2], io::BvhChannel::kZrotation) << n.name;
   }
   // output frame f is source frame 2f (up to the file's frame time .0083333 not being exactly
   // 1/120 s: at most 11 µs apart): the round-trip tolerance, 1e-4 × height, in the same unit
-  const Positions a = joint_positions(src, core::io::kCmuUnit), b = joint_positions(got, core::io::kCmuUnit);
-  const double height = core::io::bvh_rest_extent(src).height * core::io::kCmuUnit;
+  const Positions a = joint_positions(src, io::kCmuUnit), b = joint_positions(got, io::kCmuUnit);
+  const double height = io::bvh_rest_extent(src).height * io::kCmuUnit;
   double worst = 0;
   for (const auto& [name, track] : b) {
     for (int f = 0; f < got.frames; ++f) worst = std::max(worst, (track[f] - a.at(name)[2 * f]).norm());
@@ -185,9 +185,9 @@ TEST(EditCommand, EditsInMotionKeepingFeetAndOtherFrames) {
   ASSERT_EQ(r.status, 0) << r.err;
   r = pindrag(dir, "convert " + walk() + " " + plain);
   ASSERT_EQ(r.status, 0) << r.err;
-  const core::io::BvhDocument a = read_bvh(plain), b = read_bvh(edited);
+  const io::BvhDocument a = read_bvh(plain), b = read_bvh(edited);
   ASSERT_EQ(a.frames, b.frames);
-  const Positions pa = joint_positions(a, core::io::kCmuUnit), pb = joint_positions(b, core::io::kCmuUnit);
+  const Positions pa = joint_positions(a, io::kCmuUnit), pb = joint_positions(b, io::kCmuUnit);
   const int first = 96, last = 156, falloff = 12;  // 0.8 s, 1.3 s and 0.1 s at 120 fps
   double foot = 0, hand = 0;
   for (int f = 0; f < a.frames; ++f) {

@@ -11,7 +11,7 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
 
@@ -123,7 +123,7 @@ TEST(DynamicsCommand, WeldedRootFixesTheFigure) {
 }
 
 TEST(DynamicsCommand, UrdfCharacterByName) {
-  const auto m = core::io::load_character("manipulator5").model;
+  const auto m = io::load_character("manipulator5").model;
   const json out = cli::run_dynamics(*m, {{"q", {{"joint2", 0.3}, {"joint3", -0.6}}}});
   EXPECT_EQ(out["nv"], 5);
   // at rest the torques are the bias, which is gravity; the slewing axis carries none

@@ -20,7 +20,7 @@
 //
 // Conventions mapped here (test side only):
 //   - URDF and MJCF worlds are Z-up: our world and link axes are theirs re-expressed with
-//     C = core::io::urdf_to_y_up() (FrameMap). 1-DOF coordinates need no mapping.
+//     C = io::urdf_to_y_up() (FrameMap). 1-DOF coordinates need no mapping.
 //   - MuJoCo's free joint: qpos = (p_W, quaternion), qvel = [v_W of the body origin; ω in the
 //     body frame], qacc its time derivative; ours: q = (p, quaternion) in the parent frame,
 //     v = [ω; v] body twist in the child frame. qvel = T v with T per joint, qacc = T a + Ṫ v,
@@ -53,8 +53,8 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/bundled_characters.hpp"
-#include "core/io/urdf.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/urdf.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
@@ -188,7 +188,7 @@ struct FrameMap {
   Matrix3 A = Matrix3::Identity();
   Matrix3 B = Matrix3::Identity();
 };
-FrameMap z_up_world() { return {core::io::urdf_to_y_up(), core::io::urdf_to_y_up()}; }
+FrameMap z_up_world() { return {io::urdf_to_y_up(), io::urdf_to_y_up()}; }
 
 std::string mj_name(const mjModel* m, int type, int id, const char* fallback) {
   const char* n = mj_id2name(m, type, id);
@@ -487,7 +487,7 @@ std::string write_mujoco_urdf(const std::string& urdf, const std::string& out, i
 std::shared_ptr<const Model> with_mujoco_inertias(const Model& m,
                                                   const mjModel* mj,
                                                   double& change) {
-  const Matrix3 C = core::io::urdf_to_y_up();
+  const Matrix3 C = io::urdf_to_y_up();
   core::ModelBuilder b = core::to_builder(m);
   change = 0;
   for (int body = 1; body < mj->nbody; ++body) {
@@ -516,7 +516,7 @@ std::string compare_urdf_with_mujoco(const std::string& label,
   Mujoco mj(copy);
   if (!mj.m) return "MuJoCo could not load it: " + mj.error;
   double change = 0;
-  const auto m = with_mujoco_inertias(*core::io::load_urdf_file(copy).model, mj.m, change);
+  const auto m = with_mujoco_inertias(*io::load_urdf_file(copy).model, mj.m, change);
   std::string note;
   if (filled) note = std::to_string(filled) + " massless links given " + sci(kFillMass) + " kg";
   if (change > 1e-12) {
@@ -541,7 +541,7 @@ std::string builder_from_mujoco(const mjModel* m, core::ModelBuilder& b) {
     return std::to_string(roots) +
            " bodies hang from the world, and our Model has exactly one root link";
   }
-  const Matrix3 C = core::io::urdf_to_y_up();
+  const Matrix3 C = io::urdf_to_y_up();
   auto yup = [&](const Transform& X) { return Transform{C * X.R * C.transpose(), C * X.p}; };
   auto vec3 = [](const mjtNum* x) { return Vector3(x[0], x[1], x[2]); };
   auto quat = [](const mjtNum* x) { return Quaternion(x[0], x[1], x[2], x[3]); };
@@ -661,7 +661,7 @@ VectorXd from_kdl(const Model& m, const KDL::JntArray& x, const std::vector<std:
 std::string compare_with_kdl(const std::string& label, const std::string& urdf) {
   const KdlTree kdl(urdf);
   if (!kdl.error.empty()) return kdl.error;
-  const auto full = core::io::load_urdf_file(urdf).model;  // root as in the file
+  const auto full = io::load_urdf_file(urdf).model;  // root as in the file
   const Model& m = *full;
   for (int i = 1; i < m.njoints; ++i) {
     if (core::joint_nv(m.joint_type[i]) > 1) return "a multi-DOF joint; KDL has 1-DOF joints only";
@@ -808,7 +808,7 @@ TEST(DynamicsOracle, BundledUrdfsAgreeWithMujoco) {
   ScratchDir scratch;
   for (const char* name : {"arm7", "manipulator5"}) {
     SCOPED_TRACE(name);
-    const std::string urdf = core::io::characters_dir() + "/" + name + ".urdf";
+    const std::string urdf = io::characters_dir() + "/" + name + ".urdf";
     EXPECT_EQ(compare_urdf_with_mujoco(name, urdf, scratch), "");
   }
 }
@@ -816,7 +816,7 @@ TEST(DynamicsOracle, BundledUrdfsAgreeWithMujoco) {
 TEST(DynamicsOracle, BundledUrdfsAgreeWithKdl) {
   for (const char* name : {"arm7", "manipulator5"}) {
     SCOPED_TRACE(name);
-    EXPECT_EQ(compare_with_kdl(name, core::io::characters_dir() + "/" + name + ".urdf"), "");
+    EXPECT_EQ(compare_with_kdl(name, io::characters_dir() + "/" + name + ".urdf"), "");
   }
 }
 
@@ -826,8 +826,8 @@ TEST(DynamicsOracle, BundledUrdfsAgreeWithKdl) {
 TEST(DynamicsOracle, BenchUrdfsAgreeWithTheirMujocoTwins) {
   PINDRAG_REQUIRE_BENCH_DIR();
   const std::string dir = fixtures::bench_models_dir();
-  core::io::LoadOptions free_root;
-  free_root.root = core::io::RootJoint::kFree;
+  io::LoadOptions free_root;
+  free_root.root = io::RootJoint::kFree;
   // twin.xml ↔ the URDF it was written from (free-root figures load with a free root)
   const std::vector<std::tuple<std::string, std::string, bool>> twins = {
       {"human48_free.xml", "human48.urdf", true},
@@ -843,7 +843,7 @@ TEST(DynamicsOracle, BenchUrdfsAgreeWithTheirMujocoTwins) {
       continue;
     }
     const auto m =
-        core::io::load_urdf_file(dir + "/" + urdf, free ? free_root : core::io::LoadOptions{})
+        io::load_urdf_file(dir + "/" + urdf, free ? free_root : io::LoadOptions{})
             .model;
     EXPECT_EQ(compare_with_mujoco(urdf + " vs " + xml, dir + "/" + xml, *m, z_up_world()), "");
   }

@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "core/configuration.hpp"
-#include "core/io/bundled_characters.hpp"
-#include "core/io/character_json.hpp"
-#include "core/io/urdf.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/character_json.hpp"
+#include "io/urdf.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
 #include "core/swing_twist.hpp"

@@ -21,8 +21,8 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/bundled_characters.hpp"
-#include "core/io/urdf.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/urdf.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
@@ -92,7 +92,7 @@ DhChain manipulator5_dh(bool with_load = true) {
 }
 
 std::shared_ptr<const core::Model> manipulator5() {
-  return core::io::load_character("manipulator5").model;
+  return io::load_character("manipulator5").model;
 }
 
 // our velocity index of DH joint j (joints are named joint1 … joint5)
@@ -164,7 +164,7 @@ TEST(NewtonEuler, DhFramesAreTheUrdfLinkFrames) {
   const auto m = manipulator5();
   ASSERT_EQ(m->nv, 5);
   const DhChain dh = manipulator5_dh(false);
-  const Matrix3 C = core::io::urdf_to_y_up();
+  const Matrix3 C = io::urdf_to_y_up();
   core::Data d(*m);
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const DhState s = random_dh_state(*m, seed);

@@ -1,4 +1,4 @@
-// libFuzzer harness for core/io/bvh.hpp. Any input must parse or fail with core::ModelError;
+// libFuzzer harness for io/bvh.hpp. Any input must parse or fail with core::ModelError;
 // nothing else may escape, crash, hang or leak. A document that parses must import; its export
 // (names, channel orders and units of the file) must parse again with the same hierarchy and frame
 // count, and every joint and End Site must land where the original put it, within what the
@@ -11,18 +11,18 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/io/bvh.hpp"
+#include "io/bvh.hpp"
 
 namespace {
 
-using core::io::BvhDocument;
+using io::BvhDocument;
 
 // an upper bound on the position error the writer's rounding can cause for a frame: 6 decimals
 // of a degree (< 1e-8 rad per angle) on every lever, 5e-7 units per coordinate, per level
 double tolerance(const BvhDocument& d, int frame) {
   double levers = 1;
   int depth = 1;
-  for (const core::io::BvhNode& n : d.nodes) {
+  for (const io::BvhNode& n : d.nodes) {
     levers += n.offset.norm();
     int k = 1;
     for (int p = n.parent; p >= 0; p = d.nodes[p].parent) ++k;
@@ -40,28 +40,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   BvhDocument doc;
   try {
-    doc = core::io::parse_bvh(text, "fuzz.bvh");
+    doc = io::parse_bvh(text, "fuzz.bvh");
   } catch (const core::ModelError&) {
     return 0;
   }
   if (doc.values.size() != static_cast<std::size_t>(doc.frames) * doc.channels) std::abort();
 
   // a parsed document always imports
-  const core::io::BvhImport imp = core::io::import_bvh(doc, "fuzz.bvh");
-  core::io::BvhExportOptions options;
+  const io::BvhImport imp = io::import_bvh(doc, "fuzz.bvh");
+  io::BvhExportOptions options;
   options.layout = &imp.layout;
   std::string written;
   try {
-    written = core::io::write_bvh(*imp.model, imp.clip, options);
+    written = io::write_bvh(*imp.model, imp.clip, options);
   } catch (const std::invalid_argument&) {
     // only a value at the edge of kMaxBvhMagnitude may refuse to be written
     double largest = 0;
     for (double v : doc.values) largest = std::max(largest, std::abs(v));
     for (const auto& n : doc.nodes) largest = std::max(largest, n.offset.cwiseAbs().maxCoeff());
-    if (largest < 0.25 * core::io::kMaxBvhMagnitude) std::abort();
+    if (largest < 0.25 * io::kMaxBvhMagnitude) std::abort();
     return 0;
   }
-  const BvhDocument again = core::io::parse_bvh(written, "fuzz-rewritten.bvh");
+  const BvhDocument again = io::parse_bvh(written, "fuzz-rewritten.bvh");
   if (again.frames != doc.frames || again.nodes.size() != doc.nodes.size()) std::abort();
   for (std::size_t k = 0; k < doc.nodes.size(); ++k) {
     if (again.nodes[k].kind != doc.nodes[k].kind || again.nodes[k].parent != doc.nodes[k].parent) {
@@ -71,8 +71,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (std::abs(again.frame_time - doc.frame_time) > 1e-12 * doc.frame_time) std::abort();
   // (rest poses may differ by design: position channels are written over OFFSET 0 0 0)
   for (int f = 0; f < std::min(doc.frames, 8); ++f) {
-    const auto a = core::io::bvh_world_poses(doc, f);
-    const auto b = core::io::bvh_world_poses(again, f);
+    const auto a = io::bvh_world_poses(doc, f);
+    const auto b = io::bvh_world_poses(again, f);
     const double tol = tolerance(doc, f);
     for (std::size_t k = 0; k < a.size(); ++k) {
       if (!((a[k].p - b[k].p).norm() <= tol)) std::abort();

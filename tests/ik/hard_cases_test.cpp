@@ -10,7 +10,7 @@
 
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/bundled_characters.hpp"
+#include "io/bundled_characters.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
 #include "core/swing_twist.hpp"
@@ -124,7 +124,7 @@ TEST(HardCases, StretchedLimbSingularityStaysBoundedAndRecovers) {
 // #2: the dragged link at a singularity of the top level with a fixed root
 TEST(HardCases, TopLevelSingularityWithFixedRootIsDamped) {
   auto scenario = [] {
-    Rig rig(core::io::load_character("arm7").model);
+    Rig rig(io::load_character("arm7").model);
     const int tip = rig.model->njoints - 1;
     const char* tip_name = rig.model->link_name[tip].c_str();
     const Vector3 base = rig.p(rig.model->link_name[1].c_str());
@@ -239,7 +239,7 @@ TEST(HardCases, JointsDrivenOutOfRangeRecoverWithoutChatter) {
   expect_deterministic(scenario);
   // a fixed-root arm dragged where only a joint beyond its limit reaches: the drag wins, then
   // the joint returns once the drag lets go
-  Rig arm(core::io::load_character("arm7").model);
+  Rig arm(io::load_character("arm7").model);
   const int tip = arm.model->njoints - 1;
   const int drag = arm.problem.add(DragTask{.link = tip, .target_W = arm.p(arm.model->link_name[1].c_str()) + Vector3(0, 0.05, 0)});
   double worst = 0;

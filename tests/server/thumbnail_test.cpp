@@ -21,7 +21,7 @@
 
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
-#include "core/io/assimp_import.hpp"
+#include "io/assimp_import.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 // Under LeakSanitizer: tests/server/lsan_mesa.supp, which names Mesa's library only.
@@ -263,7 +263,7 @@ TEST(Thumbnail, SkinnedMeshIsDrawnInsteadOfTheShapes) {
   PINDRAG_REQUIRE_DATA_DIR();
   const std::string file = fixtures::data_dir() + "/gltf/CesiumMan.glb";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << file << " is absent; skipping";
-  const core::io::SkinnedImport imported = core::io::import_skinned_file(file);
+  const io::SkinnedImport imported = io::import_skinned_file(file);
   ASSERT_FALSE(imported.mesh.empty());
   const core::Model& m = *imported.model;
   const auto o = plain(192);

@@ -1,0 +1,21 @@
+// Writing a file so that readers see either the old contents or the new, never a torn file.
+#pragma once
+
+#include "io/core_names.hpp"
+
+#include <cstddef>
+#include <string>
+
+namespace io {
+
+/// Writes `size` bytes to a fresh temporary file beside `path` (same file system), fsyncs it,
+/// renames it over `path` and fsyncs the folder, so the rename itself survives a crash.
+/// On failure the temporary file is removed and `path` is untouched.
+/// @throws std::system_error naming the path and the step that failed
+void write_file_atomically(const std::string& path, const void* bytes, std::size_t size);
+
+inline void write_file_atomically(const std::string& path, const std::string& text) {
+  write_file_atomically(path, text.data(), text.size());
+}
+
+}  // namespace io
