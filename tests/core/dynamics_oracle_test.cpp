@@ -8,7 +8,7 @@
 // friction loss, passive forces and actuation disabled, armature, damping and stiffness zeroed.
 // Models reach MuJoCo as
 //   - our own models (human48, human34, the branching test tree) written out as MJCF by
-//     write_mjcf() below: free root, ball joints, hinges, slides, inertials, our Y-up world;
+//     fixtures::write_mjcf() (tests/fixtures/mjcf_writer.hpp): free root, ball joints, hinges, slides, inertials, our Y-up world;
 //   - URDF files loaded by MuJoCo's URDF reader from a copy that keeps every link a body and gives
 //     massless links a small mass (MuJoCo refuses massless moving bodies); our model loads the same
 //     copy, so both see identical inertias;
@@ -29,6 +29,8 @@
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+
+#include "tests/fixtures/mjcf_writer.hpp"
 #include <tinyxml2.h>
 #include <unistd.h>
 #include <urdf_parser/urdf_parser.h>
@@ -372,63 +374,6 @@ std::string compare_with_mujoco(const std::string& label,
   Mujoco mj(path);
   if (!mj.m) return "MuJoCo could not load it: " + mj.error;
   return compare_with_mujoco(label, mj, m, frames, note);
-}
-
-// Our model as MJCF, in our own (Y-up) world: one body per link with its joint placement,
-// a freejoint, ball, hinge or slide joint (none for fixed), and the link's inertial.
-std::string write_mjcf(const Model& m) {
-  std::ostringstream o;
-  o << std::setprecision(17);
-  auto vec = [&](const Vector3& x) {
-    std::ostringstream s;
-    s << std::setprecision(17) << x.x() << " " << x.y() << " " << x.z();
-    return s.str();
-  };
-  o << "<mujoco model=\"" << m.name << "\">\n"
-    << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"false\" "
-       "boundmass=\"0\" boundinertia=\"0\"/>\n"
-    << "  <option gravity=\"" << vec(m.gravity) << "\"/>\n"
-    << "  <default><joint armature=\"0\" damping=\"0\" limited=\"false\"/></default>\n"
-    << "  <worldbody>\n";
-  std::function<void(int, int)> body = [&](int i, int depth) {
-    const std::string pad(2 * depth + 4, ' ');
-    const Quaternion r(m.X_PJ[i].R);
-    o << pad << "<body name=\"" << m.link_name[i] << "\" pos=\"" << vec(m.X_PJ[i].p) << "\" quat=\""
-      << r.w() << " " << r.x() << " " << r.y() << " " << r.z() << "\">\n";
-    const core::SpatialInertia& I = m.inertia[i];
-    if (I.mass > 0) {
-      const Matrix3 Ic = I.inertia_about_com();
-      o << pad << "  <inertial pos=\"" << vec(I.com()) << "\" mass=\"" << I.mass
-        << "\" fullinertia=\"" << Ic(0, 0) << " " << Ic(1, 1) << " " << Ic(2, 2) << " " << Ic(0, 1)
-        << " " << Ic(0, 2) << " " << Ic(1, 2) << "\"/>\n";
-    }
-    const std::string name = m.joint_name[i];
-    switch (m.joint_type[i]) {
-      case core::JointType::kFixed:
-        break;
-      case core::JointType::kRevolute:
-      case core::JointType::kPrismatic:
-        o << pad << "  <joint name=\"" << name << "\" type=\""
-          << (m.joint_type[i] == core::JointType::kRevolute ? "hinge" : "slide") << "\" axis=\""
-          << vec(m.axis[i]) << "\"/>\n";
-        break;
-      case core::JointType::kSpherical:
-        o << pad << "  <joint name=\"" << name << "\" type=\"ball\"/>\n";
-        break;
-      case core::JointType::kFree:
-        o << pad << "  <freejoint name=\"" << name << "\"/>\n";
-        break;
-    }
-    for (int c = i + 1; c < m.subtree_end[i]; ++c) {
-      if (m.parent[c] == i) body(c, depth + 1);
-    }
-    o << pad << "</body>\n";
-  };
-  for (int i = 1; i < m.njoints; ++i) {
-    if (m.parent[i] == 0) body(i, 0);
-  }
-  o << "  </worldbody>\n</mujoco>\n";
-  return o.str();
 }
 
 // A copy of a URDF that MuJoCo 2.2.2 loads with every link kept as a body (platform.md §5):
@@ -787,7 +732,7 @@ TEST(DynamicsOracle, OurModelsAgreeWithMujoco) {
   for (const auto& m : models) {
     SCOPED_TRACE(m->name);
     const std::string path = scratch.file(m->name + ".xml");
-    std::ofstream(path) << write_mjcf(*m);
+    std::ofstream(path) << fixtures::write_mjcf(*m);
     EXPECT_EQ(compare_with_mujoco(m->name + " (ours, as MJCF)", path, *m, FrameMap{}), "");
   }
 }
@@ -797,7 +742,7 @@ TEST(DynamicsOracle, HumanFigureWelded) {
   ScratchDir scratch;
   const auto m = core::weld_root(core::build_human_figure({}));
   const std::string path = scratch.file("human48_welded.xml");
-  std::ofstream(path) << write_mjcf(*m);
+  std::ofstream(path) << fixtures::write_mjcf(*m);
   EXPECT_EQ(compare_with_mujoco("human48 welded (ours, as MJCF)", path, *m, FrameMap{}), "");
 }
 

@@ -1,0 +1,26 @@
+// Placing a character on the ground: its free root moved along the ground normal until the
+// lowest point of its collision shapes touches the plane.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "core/model.hpp"
+#include "sim/environment.hpp"
+
+namespace sim {
+
+/// Signed height of the lowest collision point above the plane for configuration q (m); +inf
+/// when the model has no collision shape.
+double lowest_point_height(const core::Model& model,
+                           const Eigen::VectorXd& q,
+                           const GroundPlane& ground);
+
+/// q with the free root shifted along the ground normal so the lowest collision point lies
+/// `depth` below the plane (0: touching). q itself when the root is not a free joint or the
+/// model has no collision shape.
+Eigen::VectorXd place_on_ground(const core::Model& model,
+                                const Eigen::VectorXd& q,
+                                const GroundPlane& ground,
+                                double depth = 0);
+
+}  // namespace sim
