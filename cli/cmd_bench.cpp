@@ -3,12 +3,14 @@
 
 #include "cli/accuracy_report.hpp"
 #include "cli/commands.hpp"
+#include "cli/sim_accuracy_report.hpp"
 
 namespace cli {
 
 void add_bench_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("bench", "measure what accuracy costs in time: sweep the IK settings over "
-                                          "scripted drags and write a report with plots");
+                                          "scripted drags, and the integrators over the book's "
+                                          "box tests, and write reports with plots");
   auto dir = std::make_shared<std::string>();
   cmd->add_option("--report", *dir, "folder for accuracy-vs-time.md and its SVG plots")->required();
   cmd->callback([dir] {
@@ -19,6 +21,11 @@ void add_bench_command(CLI::App& app) {
     });
     if (tty) std::cerr << "\n";
     std::cout << write_accuracy_report(results, *dir) << "\n";
+    const auto integrators = run_integrator_sweep([tty](int done, int total) {
+      if (tty) std::cerr << "\rintegrators " << done << "/" << total << std::flush;
+    });
+    if (tty) std::cerr << "\n";
+    std::cout << write_integrator_report(integrators, *dir) << "\n";
   });
 }
 
