@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "animator/session_file.hpp"
+#include "server/apply_message.hpp"
 
 namespace server {
 
@@ -47,8 +48,8 @@ void SessionActor::unsubscribe(std::uint64_t connection) {
   enqueue(std::move(item));
 }
 
-void SessionActor::post(std::uint64_t connection, ClientMessage message) {
-  if (message.drag_move) {
+void SessionActor::post(std::uint64_t connection, ClientRequest request) {
+  if (const auto* move = std::get_if<DragMove>(&request.message)) {
     {
       std::lock_guard lock(mutex_);
       ++stats_.drag_samples_received;
@@ -61,8 +62,8 @@ void SessionActor::post(std::uint64_t connection, ClientMessage message) {
         mailbox_.reset();
       }
       if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
-      mailbox_->move = *message.drag_move;
-      if (!message.id.is_null()) mailbox_->ack_ids.push_back(std::move(message.id));
+      mailbox_->move = *move;
+      if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
     }
     wake_.notify_one();
     return;
@@ -70,7 +71,7 @@ void SessionActor::post(std::uint64_t connection, ClientMessage message) {
   Item item;
   item.kind = Item::Kind::kMessage;
   item.connection = connection;
-  item.message = std::move(message);
+  item.request = std::move(request);
   enqueue(std::move(item));
 }
 
@@ -159,7 +160,7 @@ bool SessionActor::apply_drag(DragSample& sample) {
     return false;
   }
   try {
-    session_->drag_move(sample.move.target, sample.move.rotation);
+    apply(*session_, sample.move);
   } catch (const std::exception& e) {
     for (const auto& id : sample.ack_ids) send_to(sample.connection, error_message(id, e.what()));
     if (sample.ack_ids.empty()) send_to(sample.connection, error_message(nullptr, e.what()));
@@ -189,22 +190,25 @@ void SessionActor::process(Item& item) {
       item.call(*session_);
       if (item.edit) after_edit();
       break;
-    case Item::Kind::kMessage: {
-      ClientMessage& m = item.message;
-      try {
-        m.edit(*session_);
-      } catch (const std::exception& e) {
-        send_to(item.connection, error_message(m.id, e.what()));
-        break;
-      }
-      if (!m.id.is_null()) send_to(item.connection, ack_message(m.id, m.type));
-      if (m.type != "drag_begin") after_edit();
+    case Item::Kind::kMessage:
+      apply_request(item.connection, item.request);
       break;
-    }
     case Item::Kind::kDrag:
       apply_drag(item.drag);
       break;
   }
+}
+
+void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& request) {
+  try {
+    apply(*session_, request.message);
+  } catch (const std::exception& e) {
+    send_to(connection, error_message(request.id, e.what()));
+    return;
+  }
+  if (!request.id.is_null()) send_to(connection, ack_message(request.id, message_type(request.message)));
+  // a drag shows in the pose frames; anything else may change what `state` carries
+  if (!std::holds_alternative<DragBegin>(request.message)) after_edit();
 }
 
 void SessionActor::after_edit() {

@@ -199,15 +199,15 @@ class Connection : public std::enable_shared_from_this<Connection> {
       return read_next();
     }
     const std::string text = beast::buffers_to_string(in_.data());
-    ClientMessage message;
+    ClientRequest request;
     try {
-      message = parse_client_message(text, actor_->model());
+      request = parse_client_message(text);
     } catch (const ProtocolError& e) {
       queue_text(error_message(e.id, e.what()));
       return read_next();
     }
-    if (message.type == "hello") {
-      if (message.protocol != kProtocolVersion) {
+    if (const auto* hello = std::get_if<Hello>(&request.message)) {
+      if (hello->protocol != kProtocolVersion) {
         ws_.async_close(websocket::close_reason(websocket::close_code::protocol_error, "unsupported protocol version"),
                         [self = shared_from_this()](beast::error_code) {});
         return read_next();
@@ -216,15 +216,15 @@ class Connection : public std::enable_shared_from_this<Connection> {
         subscribed_ = true;
         actor_->subscribe(id_, std::make_shared<Subscriber>(weak_from_this()));
       } else {
-        queue_text(error_message(message.id, "hello: sent twice on one connection"));
+        queue_text(error_message(request.id, "hello: sent twice on one connection"));
       }
       return read_next();
     }
     if (!subscribed_) {
-      queue_text(error_message(message.id, "message: send hello first (rule: the first message is hello)"));
+      queue_text(error_message(request.id, "message: send hello first (rule: the first message is hello)"));
       return read_next();
     }
-    actor_->post(id_, std::move(message));
+    actor_->post(id_, std::move(request));
     read_next();
   }
 
