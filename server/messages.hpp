@@ -39,7 +39,7 @@ struct Hello {
 struct DragBegin {
   static constexpr const char* kType = "drag_begin";
   static constexpr std::array kFields{"link", "target", "point"};
-  std::string link;
+  std::string link{};
   Position target{};  // world
   Position point{};   // link frame; absent on the wire: the link origin
   bool operator==(const DragBegin&) const = default;
@@ -51,7 +51,7 @@ struct DragMove {
   static constexpr std::array kFields{"seq", "target", "rotation"};
   std::uint32_t seq = 0;
   Position target{};  // world, absolute
-  std::optional<Rotation> rotation;
+  std::optional<Rotation> rotation{};
   bool operator==(const DragMove&) const = default;
 };
 
@@ -64,7 +64,7 @@ struct DragEnd {
 struct Pin {
   static constexpr const char* kType = "pin";
   static constexpr std::array kFields{"link", "mode", "point"};
-  std::string link;
+  std::string link{};
   ik::TaskMode mode = ik::TaskMode::kPosition;  // the default when absent on the wire
   Position point{};
   bool operator==(const Pin&) const = default;
@@ -73,16 +73,16 @@ struct Pin {
 struct Unpin {
   static constexpr const char* kType = "unpin";
   static constexpr std::array kFields{"link"};
-  std::string link;
+  std::string link{};
   bool operator==(const Unpin&) const = default;
 };
 
 struct MovePin {
   static constexpr const char* kType = "move_pin";
   static constexpr std::array kFields{"link", "target", "rotation"};
-  std::string link;
+  std::string link{};
   Position target{};
-  std::optional<Rotation> rotation;
+  std::optional<Rotation> rotation{};
   bool operator==(const MovePin&) const = default;
 };
 
@@ -98,14 +98,14 @@ struct SetSettings {
 struct SetEffects {
   static constexpr const char* kType = "set_effects";
   static constexpr std::array kFields{"scene"};
-  animator::Scene scene;
+  animator::Scene scene{};
   bool operator==(const SetEffects&) const = default;
 };
 
 struct KeyInsert {
   static constexpr const char* kType = "key_insert";
   static constexpr std::array kFields{"time", "interpolation"};
-  std::optional<double> time;  // absent: the playback time
+  std::optional<double> time{};  // absent: the playback time
   animator::Interpolation interpolation = animator::Interpolation::kSmooth;
   bool operator==(const KeyInsert&) const = default;
 };
@@ -180,8 +180,8 @@ struct Layer {
   static constexpr const char* kType = "layer";
   static constexpr std::array kFields{"index", "muted", "weight", "remove"};
   int index = 0;
-  std::optional<bool> muted;
-  std::optional<double> weight;
+  std::optional<bool> muted{};
+  std::optional<double> weight{};
   bool remove = false;
   bool operator==(const Layer&) const = default;
 };
@@ -240,7 +240,7 @@ using ClientMessage = std::variant<Hello,
 /// A message with the envelope's `id` (any JSON number or string; null when the client sent
 /// none), which the `ack` or `error` answer carries back.
 struct ClientRequest {
-  ClientMessage message;
+  ClientMessage message{};
   nlohmann::json id = nullptr;
   bool operator==(const ClientRequest&) const = default;
 };
