@@ -224,7 +224,8 @@ void Session::key_set_interpolation(int index, Interpolation interpolation) {
 
 void Session::bake_keys(double rate) {
   if (doc_.keys.empty()) throw SessionError("there are no keys to bake");
-  if (!std::isfinite(rate) || rate <= 0 || rate > 1000) throw SessionError("rate", "must be in (0, 1000]");
+  if (!std::isfinite(rate) || rate <= 0 || rate > 1000)
+    throw SessionError("rate", "must be in (0, 1000]");
   core::Clip clip;
   clip.frame_time = 1.0 / rate;
   const int n = static_cast<int>(std::floor(doc_.keys.duration() * rate + 1e-9)) + 1;
@@ -236,7 +237,8 @@ void Session::bake_keys(double rate) {
 // --- clips and layers ----------------------------------------------------------------------------
 
 void Session::set_clip(core::Clip clip, const std::string& label) {
-  if (const std::string e = core::check_clip(*model_, clip); !e.empty()) throw SessionError("clip", e);
+  if (const std::string e = core::check_clip(*model_, clip); !e.empty())
+    throw SessionError("clip", e);
   if (clip.empty()) throw SessionError("clip", "has no frames");
   const Document before = doc_;
   doc_.clip = std::make_shared<const core::Clip>(std::move(clip));
@@ -266,7 +268,8 @@ void Session::set_layer_muted(int index, bool muted) {
 
 void Session::set_layer_weight(int index, double weight) {
   check_layer(doc_.layers, index);
-  if (!std::isfinite(weight) || weight < 0 || weight > 10) throw SessionError("weight", "must be in [0, 10]");
+  if (!std::isfinite(weight) || weight < 0 || weight > 10)
+    throw SessionError("weight", "must be in [0, 10]");
   const Document before = doc_;
   auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
   copy->weight = weight;
@@ -337,7 +340,8 @@ void Session::set_loop(bool loop, double start, double end) {
 }
 
 void Session::set_speed(double speed) {
-  if (!std::isfinite(speed) || std::abs(speed) > 100) throw SessionError("speed", "must be in [-100, 100]");
+  if (!std::isfinite(speed) || std::abs(speed) > 100)
+    throw SessionError("speed", "must be in [-100, 100]");
   playback_.speed = speed;
 }
 

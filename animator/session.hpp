@@ -44,7 +44,9 @@ class SessionError : public std::runtime_error {
       : std::runtime_error(field + ": " + rule), field_(std::move(field)) {}
   const std::string& field() const { return field_; }
   /// what() without the "<field>: " prefix.
-  std::string rule() const { return std::string(what()).substr(field_.empty() ? 0 : field_.size() + 2); }
+  std::string rule() const {
+    return std::string(what()).substr(field_.empty() ? 0 : field_.size() + 2);
+  }
 
  private:
   std::string field_;

@@ -66,16 +66,17 @@ json character_json(const core::Model& model, const std::string& name, bool skin
   json links = json::array();
   double lowest = 0, highest = 0;
   for (int i = 1; i < model.njoints; ++i) {
-    links.push_back({{"name", model.link_name[i]},
-                     {"display_name", model.display_name[i]},
-                     {"parent", model.parent[i] - 1},
-                     {"joint", model.joint_name[i]},
-                     {"joint_type", core::to_string(model.joint_type[i])},
-                     {"X_PJ", {{"p", vec3(model.X_PJ[i].p)}, {"R", quat(core::Quaternion(model.X_PJ[i].R))}}},
-                     {"axis", vec3(model.axis[i])},
-                     {"limits", limits_json(model, i)},
-                     {"range", range_json(model, i)},
-                     {"shapes", shapes_json(model, i)}});
+    links.push_back(
+        {{"name", model.link_name[i]},
+         {"display_name", model.display_name[i]},
+         {"parent", model.parent[i] - 1},
+         {"joint", model.joint_name[i]},
+         {"joint_type", core::to_string(model.joint_type[i])},
+         {"X_PJ", {{"p", vec3(model.X_PJ[i].p)}, {"R", quat(core::Quaternion(model.X_PJ[i].R))}}},
+         {"axis", vec3(model.axis[i])},
+         {"limits", limits_json(model, i)},
+         {"range", range_json(model, i)},
+         {"shapes", shapes_json(model, i)}});
   }
   // height of the neutral figure: its vertical extent over the link origins
   std::vector<core::Transform> X_W(model.njoints);
@@ -92,7 +93,9 @@ json state_json(const animator::Session& s, const std::string& session_id) {
   const core::Data& data = s.kinematics();
   json links = json::array();
   for (int i = 1; i < m.njoints; ++i) {
-    links.push_back({{"name", m.link_name[i]}, {"p", vec3(data.X_W[i].p)}, {"R", quat(core::Quaternion(data.X_W[i].R))}});
+    links.push_back({{"name", m.link_name[i]},
+                     {"p", vec3(data.X_W[i].p)},
+                     {"R", quat(core::Quaternion(data.X_W[i].R))}});
   }
   json pins = json::array();
   for (const animator::Pin& p : s.pins()) {
@@ -130,13 +133,21 @@ json state_json(const animator::Session& s, const std::string& session_id) {
           {"clip", clip},
           {"layers", layers},
           {"playback",
-           {{"time", pb.time}, {"playing", pb.playing}, {"speed", pb.speed}, {"loop", pb.loop},
-            {"loop_start", pb.loop_start}, {"loop_end", pb.loop_end}, {"duration", s.duration()}}},
+           {{"time", pb.time},
+            {"playing", pb.playing},
+            {"speed", pb.speed},
+            {"loop", pb.loop},
+            {"loop_start", pb.loop_start},
+            {"loop_end", pb.loop_end},
+            {"duration", s.duration()}}},
           {"recording", s.recording()},
           {"settings", animator::settings_to_json(s.solver_settings())},
           {"scene",
-           {{"gravity", sc.gravity}, {"ground_contact", sc.ground_contact}, {"dynamic_pins", sc.dynamic_pins},
-            {"hard_limits", sc.hard_limits}, {"self_collision", sc.self_collision}}},
+           {{"gravity", sc.gravity},
+            {"ground_contact", sc.ground_contact},
+            {"dynamic_pins", sc.dynamic_pins},
+            {"hard_limits", sc.hard_limits},
+            {"self_collision", sc.self_collision}}},
           {"falloff", s.edit_falloff()},
           {"undo",
            {{"can_undo", s.history().can_undo()},
@@ -180,7 +191,9 @@ std::string error_message(const json& id, const std::string& message) {
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-std::string encode_pose_frame(const animator::Session& s, std::uint32_t frame_id, std::uint32_t last_seq) {
+std::string encode_pose_frame(const animator::Session& s,
+                              std::uint32_t frame_id,
+                              std::uint32_t last_seq) {
   const core::Model& m = s.model();
   const core::Data& data = s.kinematics();
   const int n = m.nlinks();
@@ -199,9 +212,9 @@ std::string encode_pose_frame(const animator::Session& s, std::uint32_t frame_id
     const core::Quaternion world(data.X_W[i].R);
     // the joint's own rotation: the link in its parent, with the joint placement taken out
     const core::Quaternion own(core::Matrix3(m.X_PJ[i].R.transpose() * data.X_P[i].R));
-    const double values[11] = {data.X_W[i].p.x(), data.X_W[i].p.y(), data.X_W[i].p.z(),
-                               world.w(), world.x(), world.y(), world.z(),
-                               own.w(), own.x(), own.y(), own.z()};
+    const double values[11] = {
+        data.X_W[i].p.x(), data.X_W[i].p.y(), data.X_W[i].p.z(), world.w(), world.x(), world.y(),
+        world.z(),         own.w(),           own.x(),           own.y(),   own.z()};
     for (double v : values) {
       put_f32(b, at, v);
       at += 4;

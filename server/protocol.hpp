@@ -55,7 +55,8 @@ std::string ack_message(const nlohmann::json& id, const std::string& request);
 std::string error_message(const nlohmann::json& id, const std::string& message);
 
 /// The binary pose frame of the session's current pose.
-std::string encode_pose_frame(const animator::Session& session, std::uint32_t frame_id,
+std::string encode_pose_frame(const animator::Session& session,
+                              std::uint32_t frame_id,
                               std::uint32_t last_seq);
 /// Rewrites the `last applied seq` field of an encoded frame (one frame, many connections).
 void set_pose_frame_seq(std::string& frame, std::uint32_t last_seq);

@@ -10,7 +10,9 @@ namespace server {
 
 using Clock = std::chrono::steady_clock;
 
-SessionActor::SessionActor(std::string id, std::unique_ptr<animator::Session> session, std::string save_path)
+SessionActor::SessionActor(std::string id,
+                           std::unique_ptr<animator::Session> session,
+                           std::string save_path)
     : id_(std::move(id)),
       session_(std::move(session)),
       model_(session_->model_ptr()),
@@ -33,7 +35,8 @@ ActorStats SessionActor::stats() const {
   return stats_;
 }
 
-void SessionActor::subscribe(std::uint64_t connection, std::shared_ptr<SessionSubscriber> subscriber) {
+void SessionActor::subscribe(std::uint64_t connection,
+                             std::shared_ptr<SessionSubscriber> subscriber) {
   Item item;
   item.kind = Item::Kind::kSubscribe;
   item.connection = connection;
@@ -130,12 +133,14 @@ void SessionActor::run() {
 
     const auto now = Clock::now();
     const bool moving = session_->needs_tick();
-    if (moving && ((new_drag_sample && now - last_tick_ >= kMinTickInterval) || now - last_tick_ >= kTickPeriod)) {
+    if (moving && ((new_drag_sample && now - last_tick_ >= kMinTickInterval) ||
+                   now - last_tick_ >= kTickPeriod)) {
       tick();
     } else if (moving && new_drag_sample) {
       // too soon after the last tick: come back when the interval has passed
       std::unique_lock lock(mutex_);
-      wake_.wait_until(lock, last_tick_ + kMinTickInterval, [&] { return stopping_ || !queue_.empty(); });
+      wake_.wait_until(lock, last_tick_ + kMinTickInterval,
+                       [&] { return stopping_ || !queue_.empty(); });
       lock.unlock();
       if (session_->needs_tick()) tick();
     }
@@ -155,7 +160,8 @@ bool SessionActor::apply_drag(DragSample& sample) {
   const auto last = last_seq_.find(sample.connection);
   if (last != last_seq_.end() && sample.move.seq <= last->second) {
     const std::string message = "drag_move.seq: must increase per connection (last applied " +
-                                std::to_string(last->second) + ", got " + std::to_string(sample.move.seq) + ")";
+                                std::to_string(last->second) + ", got " +
+                                std::to_string(sample.move.seq) + ")";
     for (const auto& id : sample.ack_ids) send_to(sample.connection, error_message(id, message));
     return false;
   }
@@ -167,7 +173,8 @@ bool SessionActor::apply_drag(DragSample& sample) {
     return false;
   }
   last_seq_[sample.connection] = sample.move.seq;
-  for (const auto& id : sample.ack_ids) send_to(sample.connection, ack_message(id, DragMove::kType));
+  for (const auto& id : sample.ack_ids)
+    send_to(sample.connection, ack_message(id, DragMove::kType));
   return true;
 }
 
@@ -176,7 +183,8 @@ void SessionActor::process(Item& item) {
     case Item::Kind::kSubscribe: {
       nlohmann::json snapshot = snapshot_json(*session_, id_);
       snapshot["type"] = "snapshot";
-      item.subscriber->send_text(snapshot.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+      item.subscriber->send_text(
+          snapshot.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
       const std::uint32_t seq = last_seq_.count(item.connection) ? last_seq_[item.connection] : 0;
       item.subscriber->send_pose(encode_pose_frame(*session_, frame_id_, seq));
       subscribers_[item.connection] = std::move(item.subscriber);
@@ -206,7 +214,8 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
     send_to(connection, error_message(request.id, e.what()));
     return;
   }
-  if (!request.id.is_null()) send_to(connection, ack_message(request.id, message_type(request.message)));
+  if (!request.id.is_null())
+    send_to(connection, ack_message(request.id, message_type(request.message)));
   // a drag shows in the pose frames; anything else may change what `state` carries
   if (!std::holds_alternative<DragBegin>(request.message)) after_edit();
 }
