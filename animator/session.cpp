@@ -24,11 +24,11 @@ Session::Session(std::shared_ptr<const core::Model> model, std::string character
   refresh_kinematics();
 }
 
-void Session::check_link(int link, const char* field) const {
+void Session::check_link(int link) const {
   if (link < 1 || link >= model_->njoints) {
-    throw SessionError(std::string(field) + ": link index " + std::to_string(link) +
-                       " is out of range (the character has links 1.." +
-                       std::to_string(model_->njoints - 1) + ")");
+    throw SessionError("link", "link index " + std::to_string(link) +
+                                   " is out of range (the character has links 1.." +
+                                   std::to_string(model_->njoints - 1) + ")");
   }
 }
 
@@ -49,7 +49,7 @@ void Session::apply_document(const Document& doc) {
 
 void Session::restore(Document doc, const Playback& playback) {
   if (const std::string e = core::check_configuration(*model_, doc.q); !e.empty()) {
-    throw SessionError("pose: " + e);
+    throw SessionError("q", e);
   }
   drag_.reset();
   motion_editor_.reset();
@@ -63,7 +63,7 @@ void Session::restore(Document doc, const Playback& playback) {
 
 void Session::set_pose(const Eigen::VectorXd& q) {
   if (const std::string e = core::check_configuration(*model_, q, 1e-6); !e.empty()) {
-    throw SessionError("pose: " + e);
+    throw SessionError("q", e);
   }
   const Document before = doc_;
   doc_.q = q;
@@ -74,9 +74,9 @@ void Session::set_pose(const Eigen::VectorXd& q) {
 // --- dragging ----------------------------------------------------------------------------------
 
 void Session::drag_begin(int link, const core::Vector3& target_W, const core::Vector3& p_LinkPoint) {
-  check_link(link, "drag_begin.link");
-  if (!finite(target_W)) throw SessionError("drag_begin.target: must be 3 finite numbers");
-  if (!finite(p_LinkPoint)) throw SessionError("drag_begin.point: must be 3 finite numbers");
+  check_link(link);
+  if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
+  if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
   drag_ = Drag{link, p_LinkPoint, target_W, std::nullopt, target_W};
@@ -85,10 +85,10 @@ void Session::drag_begin(int link, const core::Vector3& target_W, const core::Ve
 }
 
 void Session::drag_move(const core::Vector3& target_W, const std::optional<core::Quaternion>& rotation) {
-  if (!drag_) throw SessionError("drag_move: no drag in progress (send drag_begin first)");
-  if (!finite(target_W)) throw SessionError("drag_move.target: must be 3 finite numbers");
+  if (!drag_) throw SessionError("no drag in progress (drag_begin first)");
+  if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
-    throw SessionError("drag_move.rotation: must be a unit quaternion [w, x, y, z]");
+    throw SessionError("rotation", "must be a unit quaternion [w, x, y, z]");
   }
   drag_->target_W = target_W;
   if (rotation) drag_->rotation = rotation->normalized();
@@ -113,8 +113,8 @@ std::optional<int> Session::dragged_link() const {
 // --- pins ----------------------------------------------------------------------------------------
 
 void Session::pin(int link, ik::TaskMode mode, const core::Vector3& p_LinkPoint) {
-  check_link(link, "pin.link");
-  if (!finite(p_LinkPoint)) throw SessionError("pin.point: must be 3 finite numbers");
+  check_link(link);
+  if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
   const Document before = doc_;
   std::erase_if(doc_.pins, [&](const Pin& p) { return p.link == link; });
   doc_.pins.push_back(Pin{link, mode, p_LinkPoint, data_.X_W[link] * p_LinkPoint,
@@ -123,24 +123,24 @@ void Session::pin(int link, ik::TaskMode mode, const core::Vector3& p_LinkPoint)
 }
 
 void Session::unpin(int link) {
-  check_link(link, "unpin.link");
+  check_link(link);
   const Document before = doc_;
   if (std::erase_if(doc_.pins, [&](const Pin& p) { return p.link == link; }) == 0) {
-    throw SessionError("unpin.link: link '" + model_->link_name[link] + "' is not pinned");
+    throw SessionError("link", "link '" + model_->link_name[link] + "' is not pinned");
   }
   commit(before, "unpin " + model_->link_name[link]);
 }
 
 void Session::move_pin(int link, const core::Vector3& target_W,
                        const std::optional<core::Quaternion>& rotation) {
-  check_link(link, "move_pin.link");
-  if (!finite(target_W)) throw SessionError("move_pin.target: must be 3 finite numbers");
+  check_link(link);
+  if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
-    throw SessionError("move_pin.rotation: must be a unit quaternion [w, x, y, z]");
+    throw SessionError("rotation", "must be a unit quaternion [w, x, y, z]");
   }
   const auto it = std::find_if(doc_.pins.begin(), doc_.pins.end(), [&](const Pin& p) { return p.link == link; });
   if (it == doc_.pins.end()) {
-    throw SessionError("move_pin.link: link '" + model_->link_name[link] + "' is not pinned");
+    throw SessionError("link", "link '" + model_->link_name[link] + "' is not pinned");
   }
   const Document before = doc_;
   auto& pin = doc_.pins[it - doc_.pins.begin()];
@@ -157,7 +157,7 @@ void Session::move_pin(int link, const core::Vector3& target_W,
 // --- settings ------------------------------------------------------------------------------------
 
 void Session::set_solver_settings(const ik::SolverSettings& s) {
-  if (const std::string e = ik::validate(s); !e.empty()) throw SessionError("settings: " + e);
+  if (const std::string e = ik::validate(s); !e.empty()) throw SessionError("settings", e);
   const Document before = doc_;
   doc_.settings = s;
   solver_->set_settings(s);
@@ -173,7 +173,7 @@ void Session::set_scene(const Scene& scene) {
 
 void Session::set_edit_falloff(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0 || seconds > 60) {
-    throw SessionError("edit_falloff: must be in [0, 60] seconds");
+    throw SessionError("seconds", "must be in [0, 60]");
   }
   const Document before = doc_;
   doc_.edit_falloff = seconds;
@@ -184,7 +184,7 @@ void Session::set_edit_falloff(double seconds) {
 
 int Session::key_insert(std::optional<double> time, Interpolation interpolation) {
   const double t = time.value_or(playback_.time);
-  if (!std::isfinite(t) || t < 0) throw SessionError("key_insert.time: must be a finite time >= 0");
+  if (!std::isfinite(t) || t < 0) throw SessionError("time", "must be a finite time >= 0");
   const Document before = doc_;
   const int index = doc_.keys.insert(Keyframe{t, doc_.q, interpolation});
   commit(before, "insert key");
@@ -193,7 +193,7 @@ int Session::key_insert(std::optional<double> time, Interpolation interpolation)
 
 void Session::key_delete(int index) {
   if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("key_delete.index: no key " + std::to_string(index));
+    throw SessionError("index", "no key " + std::to_string(index));
   }
   const Document before = doc_;
   doc_.keys.remove(index);
@@ -202,9 +202,9 @@ void Session::key_delete(int index) {
 
 int Session::key_move(int index, double time) {
   if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("key_move.index: no key " + std::to_string(index));
+    throw SessionError("index", "no key " + std::to_string(index));
   }
-  if (!std::isfinite(time) || time < 0) throw SessionError("key_move.time: must be a finite time >= 0");
+  if (!std::isfinite(time) || time < 0) throw SessionError("time", "must be a finite time >= 0");
   const Document before = doc_;
   const int moved = doc_.keys.move(index, time);
   commit(before, "move key");
@@ -213,7 +213,7 @@ int Session::key_move(int index, double time) {
 
 void Session::key_set_interpolation(int index, Interpolation interpolation) {
   if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("key_set_interpolation.index: no key " + std::to_string(index));
+    throw SessionError("index", "no key " + std::to_string(index));
   }
   const Document before = doc_;
   Keyframe k = doc_.keys.keys()[index];
@@ -223,8 +223,9 @@ void Session::key_set_interpolation(int index, Interpolation interpolation) {
 }
 
 void Session::bake_keys(double rate) {
-  if (doc_.keys.empty()) throw SessionError("bake_keys: there are no keys");
-  if (!std::isfinite(rate) || rate <= 0 || rate > 1000) throw SessionError("bake_keys.rate: must be in (0, 1000]");
+  if (doc_.keys.empty()) throw SessionError("there are no keys to bake");
+  if (!std::isfinite(rate) || rate <= 0 || rate > 1000)
+    throw SessionError("rate", "must be in (0, 1000]");
   core::Clip clip;
   clip.frame_time = 1.0 / rate;
   const int n = static_cast<int>(std::floor(doc_.keys.duration() * rate + 1e-9)) + 1;
@@ -236,8 +237,9 @@ void Session::bake_keys(double rate) {
 // --- clips and layers ----------------------------------------------------------------------------
 
 void Session::set_clip(core::Clip clip, const std::string& label) {
-  if (const std::string e = core::check_clip(*model_, clip); !e.empty()) throw SessionError("clip: " + e);
-  if (clip.empty()) throw SessionError("clip: has no frames");
+  if (const std::string e = core::check_clip(*model_, clip); !e.empty())
+    throw SessionError("clip", e);
+  if (clip.empty()) throw SessionError("clip", "has no frames");
   const Document before = doc_;
   doc_.clip = std::make_shared<const core::Clip>(std::move(clip));
   doc_.layers.clear();
@@ -247,15 +249,15 @@ void Session::set_clip(core::Clip clip, const std::string& label) {
 }
 
 namespace {
-void check_layer(const LayerStack& layers, int index, const char* field) {
+void check_layer(const LayerStack& layers, int index) {
   if (index < 0 || index >= static_cast<int>(layers.size())) {
-    throw SessionError(std::string(field) + ": no layer " + std::to_string(index));
+    throw SessionError("index", "no layer " + std::to_string(index));
   }
 }
 }  // namespace
 
 void Session::set_layer_muted(int index, bool muted) {
-  check_layer(doc_.layers, index, "layer.index");
+  check_layer(doc_.layers, index);
   const Document before = doc_;
   auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
   copy->muted = muted;
@@ -265,8 +267,9 @@ void Session::set_layer_muted(int index, bool muted) {
 }
 
 void Session::set_layer_weight(int index, double weight) {
-  check_layer(doc_.layers, index, "layer.index");
-  if (!std::isfinite(weight) || weight < 0 || weight > 10) throw SessionError("layer.weight: must be in [0, 10]");
+  check_layer(doc_.layers, index);
+  if (!std::isfinite(weight) || weight < 0 || weight > 10)
+    throw SessionError("weight", "must be in [0, 10]");
   const Document before = doc_;
   auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
   copy->weight = weight;
@@ -276,7 +279,7 @@ void Session::set_layer_weight(int index, double weight) {
 }
 
 void Session::remove_layer(int index) {
-  check_layer(doc_.layers, index, "layer.index");
+  check_layer(doc_.layers, index);
   const Document before = doc_;
   doc_.layers.erase(doc_.layers.begin() + index);
   show_animation_at(playback_.time);
@@ -284,7 +287,7 @@ void Session::remove_layer(int index) {
 }
 
 void Session::bake_layers() {
-  if (!doc_.clip) throw SessionError("bake_layers: there is no clip");
+  if (!doc_.clip) throw SessionError("there is no clip to bake the layers into");
   const Document before = doc_;
   doc_.clip = std::make_shared<const core::Clip>(bake(*model_, *doc_.clip, doc_.layers));
   doc_.layers.clear();
@@ -320,7 +323,7 @@ void Session::pause() {
 }
 
 void Session::seek(double time) {
-  if (!std::isfinite(time)) throw SessionError("seek.time: must be a finite number");
+  if (!std::isfinite(time)) throw SessionError("time", "must be a finite number");
   if (motion_editor_) finish_motion_edit();
   playback_.time = std::clamp(time, 0.0, std::max(0.0, duration()));
   if (!drag_) show_animation_at(playback_.time);
@@ -328,7 +331,8 @@ void Session::seek(double time) {
 
 void Session::set_loop(bool loop, double start, double end) {
   if (!std::isfinite(start) || !std::isfinite(end) || start < 0 || (end >= 0 && end < start)) {
-    throw SessionError("loop: needs 0 <= start <= end (end < 0: the end of the animation)");
+    throw SessionError(!std::isfinite(start) || start < 0 ? "start" : "end",
+                       "needs 0 <= start <= end (end < 0: the end of the animation)");
   }
   playback_.loop = loop;
   playback_.loop_start = start;
@@ -336,7 +340,8 @@ void Session::set_loop(bool loop, double start, double end) {
 }
 
 void Session::set_speed(double speed) {
-  if (!std::isfinite(speed) || std::abs(speed) > 100) throw SessionError("speed: must be in [-100, 100]");
+  if (!std::isfinite(speed) || std::abs(speed) > 100)
+    throw SessionError("speed", "must be in [-100, 100]");
   playback_.speed = speed;
 }
 

@@ -31,11 +31,25 @@
 
 namespace animator {
 
-/// A request the session cannot carry out (unknown link, bad number, nothing to undo is not an
-/// error). what() names the field and the rule.
+/// A request the session cannot carry out (unknown link, bad number; nothing to undo is not an
+/// error). field() names the argument at fault as the Session functions below declare it
+/// ("link", "target_W", "p_LinkPoint", "rotation", "index", "time", ...), empty when no single
+/// argument is; what() is "<field>: <rule>". The session knows no wire protocol: the server maps
+/// these fields to its message fields.
 class SessionError : public std::runtime_error {
  public:
+  /// A whole message without a field (file readers put a JSON path in it).
   using std::runtime_error::runtime_error;
+  SessionError(std::string field, const std::string& rule)
+      : std::runtime_error(field + ": " + rule), field_(std::move(field)) {}
+  const std::string& field() const { return field_; }
+  /// what() without the "<field>: " prefix.
+  std::string rule() const {
+    return std::string(what()).substr(field_.empty() ? 0 : field_.size() + 2);
+  }
+
+ private:
+  std::string field_;
 };
 
 /// Frame rate of recordings and of clips made from keys.
@@ -87,7 +101,7 @@ class Session {
   const std::vector<Pin>& pins() const { return doc_.pins; }
 
   // --- settings ------------------------------------------------------------------------------
-  void set_solver_settings(const ik::SolverSettings& s);
+  void set_solver_settings(const ik::SolverSettings& settings);
   const ik::SolverSettings& solver_settings() const { return doc_.settings; }
   void set_scene(const Scene& scene);
   const Scene& scene() const { return doc_.scene; }
@@ -160,7 +174,7 @@ class Session {
 
  private:
   friend class DocumentChange;
-  void check_link(int link, const char* field) const;
+  void check_link(int link) const;
   void commit(const Document& before, const std::string& label);
   void apply_document(const Document& doc);
   void refresh_kinematics();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 #include "animator/session_file.hpp"
 
@@ -12,247 +11,8 @@ namespace {
 
 using nlohmann::json;
 
-// Largest coordinate accepted from a client (m); anything beyond is a typo or an attack.
-constexpr double kMaxCoordinate = 1e4;
-constexpr double kMaxTime = 1e6;
-
 json vec3(const core::Vector3& v) { return json::array({v.x(), v.y(), v.z()}); }
 json quat(const core::Quaternion& q) { return json::array({q.w(), q.x(), q.y(), q.z()}); }
-
-// Reads fields of one message; every error names "<type>.<field>" and the rule.
-class Fields {
- public:
-  Fields(const json& message, std::string type) : m_(message), type_(std::move(type)) {}
-
-  [[noreturn]] void fail(const std::string& field, const std::string& rule) const {
-    throw ProtocolError(type_ + "." + field + ": " + rule, id());
-  }
-  json id() const {
-    const auto it = m_.find("id");
-    if (it == m_.end() || !(it->is_number() || it->is_string())) return nullptr;
-    return *it;
-  }
-  bool has(const char* field) const { return m_.contains(field) && !m_[field].is_null(); }
-  const json& get(const char* field) const {
-    if (!has(field)) fail(field, "is required");
-    return m_[field];
-  }
-  double number(const char* field, double lo, double hi) const {
-    const json& v = get(field);
-    if (!v.is_number()) fail(field, "must be a number");
-    const double d = v.get<double>();
-    if (!std::isfinite(d) || d < lo || d > hi) {
-      fail(field, "must be a finite number in [" + fmt(lo) + ", " + fmt(hi) + "]");
-    }
-    return d;
-  }
-  std::optional<double> optional_number(const char* field, double lo, double hi) const {
-    if (!has(field)) return std::nullopt;
-    return number(field, lo, hi);
-  }
-  int integer(const char* field, int lo, int hi) const {
-    const json& v = get(field);
-    if (!v.is_number_integer()) fail(field, "must be an integer");
-    const auto i = v.get<std::int64_t>();
-    if (i < lo || i > hi) fail(field, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return static_cast<int>(i);
-  }
-  bool boolean(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_boolean()) fail(field, "must be true or false");
-    return v.get<bool>();
-  }
-  const std::string& string(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_string()) fail(field, "must be a string");
-    return v.get_ref<const std::string&>();
-  }
-  core::Vector3 vector3(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_array() || v.size() != 3) fail(field, "must be an array of 3 numbers [x, y, z]");
-    core::Vector3 out;
-    for (int k = 0; k < 3; ++k) {
-      if (!v[k].is_number()) fail(field, "must be an array of 3 numbers [x, y, z]");
-      out[k] = v[k].get<double>();
-      if (!std::isfinite(out[k]) || std::abs(out[k]) > kMaxCoordinate) {
-        fail(field, "components must be finite and within ±" + fmt(kMaxCoordinate) + " m");
-      }
-    }
-    return out;
-  }
-  std::optional<core::Quaternion> optional_rotation(const char* field) const {
-    if (!has(field)) return std::nullopt;
-    const json& v = get(field);
-    if (!v.is_array() || v.size() != 4) fail(field, "must be a quaternion [w, x, y, z]");
-    double c[4];
-    for (int k = 0; k < 4; ++k) {
-      if (!v[k].is_number()) fail(field, "must be a quaternion [w, x, y, z]");
-      c[k] = v[k].get<double>();
-      if (!std::isfinite(c[k])) fail(field, "components must be finite");
-    }
-    core::Quaternion q(c[0], c[1], c[2], c[3]);
-    if (q.norm() < 1e-6) fail(field, "must not be the zero quaternion");
-    q.normalize();
-    return q;
-  }
-  int link(const core::Model& model, const char* field = "link") const {
-    const std::string& name = string(field);
-    const int i = model.link_index(name);
-    if (i < 1) fail(field, "no link named \"" + name.substr(0, 64) + "\"");
-    return i;
-  }
-  const json& object(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_object()) fail(field, "must be an object");
-    return v;
-  }
-
- private:
-  static std::string fmt(double d) {
-    std::string s = std::to_string(d);
-    s.erase(s.find_last_not_of('0') + 1);
-    if (!s.empty() && s.back() == '.') s.pop_back();
-    return s;
-  }
-  const json& m_;
-  std::string type_;
-};
-
-ik::TaskMode task_mode(const Fields& f) {
-  if (!f.has("mode")) return ik::TaskMode::kPosition;
-  const std::string& mode = f.string("mode");
-  if (mode == "position") return ik::TaskMode::kPosition;
-  if (mode == "orientation") return ik::TaskMode::kOrientation;
-  if (mode == "pose") return ik::TaskMode::kPose;
-  f.fail("mode", "must be \"position\", \"orientation\" or \"pose\"");
-}
-
-animator::Scene scene_from(const Fields& f, const json& j) {
-  animator::Scene scene;
-  const std::pair<const char*, bool animator::Scene::*> flags[] = {
-      {"gravity", &animator::Scene::gravity},
-      {"ground_contact", &animator::Scene::ground_contact},
-      {"dynamic_pins", &animator::Scene::dynamic_pins},
-      {"hard_limits", &animator::Scene::hard_limits},
-      {"self_collision", &animator::Scene::self_collision}};
-  for (const auto& [name, member] : flags) {
-    if (!j.contains(name)) continue;
-    if (!j[name].is_boolean()) f.fail(std::string("scene.") + name, "must be true or false");
-    scene.*member = j[name].get<bool>();
-  }
-  for (const auto& [key, value] : j.items()) {
-    bool known = false;
-    for (const auto& flag : flags) known = known || key == flag.first;
-    if (!known) f.fail("scene." + key.substr(0, 64), "is not a scene effect");
-  }
-  return scene;
-}
-
-SessionEdit parse_edit(const std::string& type, const Fields& f, const core::Model& model) {
-  using animator::Session;
-  if (type == "drag_begin") {
-    const int link = f.link(model);
-    const core::Vector3 target = f.vector3("target");
-    const core::Vector3 point = f.has("point") ? f.vector3("point") : core::Vector3::Zero();
-    return [=](Session& s) { s.drag_begin(link, target, point); };
-  }
-  if (type == "drag_end") return [](Session& s) { s.drag_end(); };
-  if (type == "pin") {
-    const int link = f.link(model);
-    const ik::TaskMode mode = task_mode(f);
-    const core::Vector3 point = f.has("point") ? f.vector3("point") : core::Vector3::Zero();
-    return [=](Session& s) { s.pin(link, mode, point); };
-  }
-  if (type == "unpin") {
-    const int link = f.link(model);
-    return [=](Session& s) { s.unpin(link); };
-  }
-  if (type == "move_pin") {
-    const int link = f.link(model);
-    const core::Vector3 target = f.vector3("target");
-    const auto rotation = f.optional_rotation("rotation");
-    return [=](Session& s) { s.move_pin(link, target, rotation); };
-  }
-  if (type == "set_settings") {
-    const json settings = f.object("settings");
-    return [settings](Session& s) {
-      ik::SolverSettings next = s.solver_settings();
-      animator::settings_from_json(settings, next);
-      s.set_solver_settings(next);
-    };
-  }
-  if (type == "set_effects") {
-    const animator::Scene scene = scene_from(f, f.object("scene"));
-    return [=](Session& s) { s.set_scene(scene); };
-  }
-  if (type == "key_insert") {
-    const auto time = f.optional_number("time", 0, kMaxTime);
-    animator::Interpolation interpolation = animator::Interpolation::kSmooth;
-    if (f.has("interpolation")) {
-      const auto parsed = animator::interpolation_from_string(f.string("interpolation"));
-      if (!parsed) f.fail("interpolation", "must be \"step\", \"linear\" or \"smooth\"");
-      interpolation = *parsed;
-    }
-    return [=](Session& s) { s.key_insert(time, interpolation); };
-  }
-  if (type == "key_delete") {
-    const int index = f.integer("index", 0, std::numeric_limits<int>::max());
-    return [=](Session& s) { s.key_delete(index); };
-  }
-  if (type == "key_move") {
-    const int index = f.integer("index", 0, std::numeric_limits<int>::max());
-    const double time = f.number("time", 0, kMaxTime);
-    return [=](Session& s) { s.key_move(index, time); };
-  }
-  if (type == "bake_keys") {
-    const double rate = f.optional_number("rate", 1, 1000).value_or(animator::kDefaultClipRate);
-    return [=](Session& s) { s.bake_keys(rate); };
-  }
-  if (type == "record") {
-    const bool on = f.boolean("on");
-    return [=](Session& s) { s.record(on); };
-  }
-  if (type == "play") return [](Session& s) { s.play(); };
-  if (type == "pause") return [](Session& s) { s.pause(); };
-  if (type == "seek") {
-    const double time = f.number("time", -kMaxTime, kMaxTime);
-    return [=](Session& s) { s.seek(time); };
-  }
-  if (type == "set_loop") {
-    const bool loop = f.boolean("loop");
-    const double start = f.optional_number("start", 0, kMaxTime).value_or(0);
-    const double end = f.optional_number("end", -kMaxTime, kMaxTime).value_or(-1);
-    return [=](Session& s) { s.set_loop(loop, start, end); };
-  }
-  if (type == "set_speed") {
-    const double speed = f.number("speed", -100, 100);
-    return [=](Session& s) { s.set_speed(speed); };
-  }
-  if (type == "layer") {
-    const int index = f.integer("index", 0, std::numeric_limits<int>::max());
-    if (f.has("remove")) {
-      if (!f.boolean("remove")) f.fail("remove", "must be true when present");
-      return [=](Session& s) { s.remove_layer(index); };
-    }
-    if (f.has("muted")) {
-      const bool muted = f.boolean("muted");
-      return [=](Session& s) { s.set_layer_muted(index, muted); };
-    }
-    if (f.has("weight")) {
-      const double weight = f.number("weight", -10, 10);
-      return [=](Session& s) { s.set_layer_weight(index, weight); };
-    }
-    f.fail("muted", "one of muted, weight or remove is required");
-  }
-  if (type == "bake_layers") return [](Session& s) { s.bake_layers(); };
-  if (type == "set_falloff") {
-    const double seconds = f.number("seconds", 0, 3600);
-    return [=](Session& s) { s.set_edit_falloff(seconds); };
-  }
-  if (type == "undo") return [](Session& s) { s.undo(); };
-  if (type == "redo") return [](Session& s) { s.redo(); };
-  throw ProtocolError("type: unknown message type \"" + type.substr(0, 64) + "\"", f.id());
-}
 
 json limits_json(const core::Model& model, int i) {
   const core::JointType t = model.joint_type[i];
@@ -302,54 +62,21 @@ void put_f32(std::string& b, size_t at, double v) {
 
 }  // namespace
 
-ClientMessage parse_client_message(std::string_view text, const core::Model& model) {
-  json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) throw ProtocolError("message: not valid JSON");
-  if (!j.is_object()) throw ProtocolError("message: must be a JSON object with a \"type\"");
-  const auto type_it = j.find("type");
-  Fields any(j, "message");
-  if (type_it == j.end() || !type_it->is_string()) {
-    throw ProtocolError("message.type: is required and must be a string", any.id());
-  }
-  if (j.contains("id") && !(j["id"].is_number() || j["id"].is_string() || j["id"].is_null())) {
-    throw ProtocolError("message.id: must be a number or a string");
-  }
-  ClientMessage out;
-  out.type = type_it->get<std::string>();
-  out.id = any.id();
-  Fields f(j, out.type);
-  if (out.type == "hello") {
-    out.protocol = f.integer("protocol", 0, std::numeric_limits<int>::max());
-  } else if (out.type == DragMove::kType) {
-    DragMove d;
-    const json& seq = f.get("seq");
-    if (!seq.is_number_unsigned() || seq.get<std::uint64_t>() > 0xFFFFFFFFull) {
-      f.fail("seq", "must be an unsigned 32-bit integer");
-    }
-    d.seq = static_cast<std::uint32_t>(seq.get<std::uint64_t>());
-    d.target = f.vector3("target");
-    d.rotation = f.optional_rotation("rotation");
-    out.drag_move = d;
-  } else {
-    out.edit = parse_edit(out.type, f, model);
-  }
-  return out;
-}
-
 json character_json(const core::Model& model, const std::string& name, bool skinned) {
   json links = json::array();
   double lowest = 0, highest = 0;
   for (int i = 1; i < model.njoints; ++i) {
-    links.push_back({{"name", model.link_name[i]},
-                     {"display_name", model.display_name[i]},
-                     {"parent", model.parent[i] - 1},
-                     {"joint", model.joint_name[i]},
-                     {"joint_type", core::to_string(model.joint_type[i])},
-                     {"X_PJ", {{"p", vec3(model.X_PJ[i].p)}, {"R", quat(core::Quaternion(model.X_PJ[i].R))}}},
-                     {"axis", vec3(model.axis[i])},
-                     {"limits", limits_json(model, i)},
-                     {"range", range_json(model, i)},
-                     {"shapes", shapes_json(model, i)}});
+    links.push_back(
+        {{"name", model.link_name[i]},
+         {"display_name", model.display_name[i]},
+         {"parent", model.parent[i] - 1},
+         {"joint", model.joint_name[i]},
+         {"joint_type", core::to_string(model.joint_type[i])},
+         {"X_PJ", {{"p", vec3(model.X_PJ[i].p)}, {"R", quat(core::Quaternion(model.X_PJ[i].R))}}},
+         {"axis", vec3(model.axis[i])},
+         {"limits", limits_json(model, i)},
+         {"range", range_json(model, i)},
+         {"shapes", shapes_json(model, i)}});
   }
   // height of the neutral figure: its vertical extent over the link origins
   std::vector<core::Transform> X_W(model.njoints);
@@ -366,7 +93,9 @@ json state_json(const animator::Session& s, const std::string& session_id) {
   const core::Data& data = s.kinematics();
   json links = json::array();
   for (int i = 1; i < m.njoints; ++i) {
-    links.push_back({{"name", m.link_name[i]}, {"p", vec3(data.X_W[i].p)}, {"R", quat(core::Quaternion(data.X_W[i].R))}});
+    links.push_back({{"name", m.link_name[i]},
+                     {"p", vec3(data.X_W[i].p)},
+                     {"R", quat(core::Quaternion(data.X_W[i].R))}});
   }
   json pins = json::array();
   for (const animator::Pin& p : s.pins()) {
@@ -404,13 +133,21 @@ json state_json(const animator::Session& s, const std::string& session_id) {
           {"clip", clip},
           {"layers", layers},
           {"playback",
-           {{"time", pb.time}, {"playing", pb.playing}, {"speed", pb.speed}, {"loop", pb.loop},
-            {"loop_start", pb.loop_start}, {"loop_end", pb.loop_end}, {"duration", s.duration()}}},
+           {{"time", pb.time},
+            {"playing", pb.playing},
+            {"speed", pb.speed},
+            {"loop", pb.loop},
+            {"loop_start", pb.loop_start},
+            {"loop_end", pb.loop_end},
+            {"duration", s.duration()}}},
           {"recording", s.recording()},
           {"settings", animator::settings_to_json(s.solver_settings())},
           {"scene",
-           {{"gravity", sc.gravity}, {"ground_contact", sc.ground_contact}, {"dynamic_pins", sc.dynamic_pins},
-            {"hard_limits", sc.hard_limits}, {"self_collision", sc.self_collision}}},
+           {{"gravity", sc.gravity},
+            {"ground_contact", sc.ground_contact},
+            {"dynamic_pins", sc.dynamic_pins},
+            {"hard_limits", sc.hard_limits},
+            {"self_collision", sc.self_collision}}},
           {"falloff", s.edit_falloff()},
           {"undo",
            {{"can_undo", s.history().can_undo()},
@@ -454,7 +191,9 @@ std::string error_message(const json& id, const std::string& message) {
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-std::string encode_pose_frame(const animator::Session& s, std::uint32_t frame_id, std::uint32_t last_seq) {
+std::string encode_pose_frame(const animator::Session& s,
+                              std::uint32_t frame_id,
+                              std::uint32_t last_seq) {
   const core::Model& m = s.model();
   const core::Data& data = s.kinematics();
   const int n = m.nlinks();
@@ -473,9 +212,9 @@ std::string encode_pose_frame(const animator::Session& s, std::uint32_t frame_id
     const core::Quaternion world(data.X_W[i].R);
     // the joint's own rotation: the link in its parent, with the joint placement taken out
     const core::Quaternion own(core::Matrix3(m.X_PJ[i].R.transpose() * data.X_P[i].R));
-    const double values[11] = {data.X_W[i].p.x(), data.X_W[i].p.y(), data.X_W[i].p.z(),
-                               world.w(), world.x(), world.y(), world.z(),
-                               own.w(), own.x(), own.y(), own.z()};
+    const double values[11] = {
+        data.X_W[i].p.x(), data.X_W[i].p.y(), data.X_W[i].p.z(), world.w(), world.x(), world.y(),
+        world.z(),         own.w(),           own.x(),           own.y(),   own.z()};
     for (double v : values) {
       put_f32(b, at, v);
       at += 4;

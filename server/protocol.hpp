@@ -1,11 +1,10 @@
-// The wire protocol v1 (docs/protocol.md): client messages parsed and validated into intents
-// with errors that name the field and the rule, the snapshot and state JSON, `report`, `ack`
-// and `error` messages, and the binary pose frame ("PDPF").
-// Pure functions: no sockets, no threads. Parsing needs only the immutable model (link names).
+// The wire protocol v1 (docs/protocol.md): client messages parsed into the values of
+// messages.hpp with errors that name the field and the rule, the snapshot and state JSON,
+// `report`, `ack` and `error` messages, and the binary pose frame ("PDPF").
+// Pure functions: no sockets, no threads.
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
@@ -15,6 +14,7 @@
 #include "animator/session.hpp"
 #include "core/model.hpp"
 #include "ik/solver.hpp"
+#include "server/messages.hpp"
 
 namespace server {
 
@@ -37,28 +37,10 @@ class ProtocolError : public std::runtime_error {
   nlohmann::json id;
 };
 
-/// `drag_move`: the only message that may be superseded by a newer one.
-struct DragMove {
-  static constexpr const char* kType = "drag_move";
-  std::uint32_t seq = 0;
-  core::Vector3 target = core::Vector3::Zero();
-  std::optional<core::Quaternion> rotation;
-};
-
-/// An edit or a playback intent, validated, to be run by the session's actor in order.
-using SessionEdit = std::function<void(animator::Session&)>;
-
-/// One decoded client message: `hello` (protocol set), a `drag_move`, or an edit.
-struct ClientMessage {
-  std::string type;
-  nlohmann::json id;  // null when the request carried none
-  int protocol = 0;   // hello
-  std::optional<DragMove> drag_move;
-  SessionEdit edit;
-};
-
-/// Parses one text frame. @throws ProtocolError naming the field and the rule
-ClientMessage parse_client_message(std::string_view text, const core::Model& model);
+/// Reads one text frame into a message and its id; the fields are checked for type and range
+/// (docs/protocol.md), link names only when the message is applied (apply_message.hpp).
+/// @throws ProtocolError naming "<type>.<field>" and the rule
+ClientRequest parse_client_message(std::string_view text);
 
 /// The character as the snapshot lists it (docs/protocol.md "Snapshot").
 nlohmann::json character_json(const core::Model& model, const std::string& name, bool skinned);
@@ -73,7 +55,8 @@ std::string ack_message(const nlohmann::json& id, const std::string& request);
 std::string error_message(const nlohmann::json& id, const std::string& message);
 
 /// The binary pose frame of the session's current pose.
-std::string encode_pose_frame(const animator::Session& session, std::uint32_t frame_id,
+std::string encode_pose_frame(const animator::Session& session,
+                              std::uint32_t frame_id,
                               std::uint32_t last_seq);
 /// Rewrites the `last applied seq` field of an encoded frame (one frame, many connections).
 void set_pose_frame_seq(std::string& frame, std::uint32_t last_seq);

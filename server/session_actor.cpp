@@ -4,12 +4,15 @@
 #include <iostream>
 
 #include "animator/session_file.hpp"
+#include "server/apply_message.hpp"
 
 namespace server {
 
 using Clock = std::chrono::steady_clock;
 
-SessionActor::SessionActor(std::string id, std::unique_ptr<animator::Session> session, std::string save_path)
+SessionActor::SessionActor(std::string id,
+                           std::unique_ptr<animator::Session> session,
+                           std::string save_path)
     : id_(std::move(id)),
       session_(std::move(session)),
       model_(session_->model_ptr()),
@@ -32,7 +35,8 @@ ActorStats SessionActor::stats() const {
   return stats_;
 }
 
-void SessionActor::subscribe(std::uint64_t connection, std::shared_ptr<SessionSubscriber> subscriber) {
+void SessionActor::subscribe(std::uint64_t connection,
+                             std::shared_ptr<SessionSubscriber> subscriber) {
   Item item;
   item.kind = Item::Kind::kSubscribe;
   item.connection = connection;
@@ -47,8 +51,8 @@ void SessionActor::unsubscribe(std::uint64_t connection) {
   enqueue(std::move(item));
 }
 
-void SessionActor::post(std::uint64_t connection, ClientMessage message) {
-  if (message.drag_move) {
+void SessionActor::post(std::uint64_t connection, ClientRequest request) {
+  if (const auto* move = std::get_if<DragMove>(&request.message)) {
     {
       std::lock_guard lock(mutex_);
       ++stats_.drag_samples_received;
@@ -61,8 +65,8 @@ void SessionActor::post(std::uint64_t connection, ClientMessage message) {
         mailbox_.reset();
       }
       if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
-      mailbox_->move = *message.drag_move;
-      if (!message.id.is_null()) mailbox_->ack_ids.push_back(std::move(message.id));
+      mailbox_->move = *move;
+      if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
     }
     wake_.notify_one();
     return;
@@ -70,7 +74,7 @@ void SessionActor::post(std::uint64_t connection, ClientMessage message) {
   Item item;
   item.kind = Item::Kind::kMessage;
   item.connection = connection;
-  item.message = std::move(message);
+  item.request = std::move(request);
   enqueue(std::move(item));
 }
 
@@ -129,12 +133,14 @@ void SessionActor::run() {
 
     const auto now = Clock::now();
     const bool moving = session_->needs_tick();
-    if (moving && ((new_drag_sample && now - last_tick_ >= kMinTickInterval) || now - last_tick_ >= kTickPeriod)) {
+    if (moving && ((new_drag_sample && now - last_tick_ >= kMinTickInterval) ||
+                   now - last_tick_ >= kTickPeriod)) {
       tick();
     } else if (moving && new_drag_sample) {
       // too soon after the last tick: come back when the interval has passed
       std::unique_lock lock(mutex_);
-      wake_.wait_until(lock, last_tick_ + kMinTickInterval, [&] { return stopping_ || !queue_.empty(); });
+      wake_.wait_until(lock, last_tick_ + kMinTickInterval,
+                       [&] { return stopping_ || !queue_.empty(); });
       lock.unlock();
       if (session_->needs_tick()) tick();
     }
@@ -154,19 +160,21 @@ bool SessionActor::apply_drag(DragSample& sample) {
   const auto last = last_seq_.find(sample.connection);
   if (last != last_seq_.end() && sample.move.seq <= last->second) {
     const std::string message = "drag_move.seq: must increase per connection (last applied " +
-                                std::to_string(last->second) + ", got " + std::to_string(sample.move.seq) + ")";
+                                std::to_string(last->second) + ", got " +
+                                std::to_string(sample.move.seq) + ")";
     for (const auto& id : sample.ack_ids) send_to(sample.connection, error_message(id, message));
     return false;
   }
   try {
-    session_->drag_move(sample.move.target, sample.move.rotation);
+    apply(*session_, sample.move);
   } catch (const std::exception& e) {
     for (const auto& id : sample.ack_ids) send_to(sample.connection, error_message(id, e.what()));
     if (sample.ack_ids.empty()) send_to(sample.connection, error_message(nullptr, e.what()));
     return false;
   }
   last_seq_[sample.connection] = sample.move.seq;
-  for (const auto& id : sample.ack_ids) send_to(sample.connection, ack_message(id, DragMove::kType));
+  for (const auto& id : sample.ack_ids)
+    send_to(sample.connection, ack_message(id, DragMove::kType));
   return true;
 }
 
@@ -175,7 +183,8 @@ void SessionActor::process(Item& item) {
     case Item::Kind::kSubscribe: {
       nlohmann::json snapshot = snapshot_json(*session_, id_);
       snapshot["type"] = "snapshot";
-      item.subscriber->send_text(snapshot.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+      item.subscriber->send_text(
+          snapshot.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
       const std::uint32_t seq = last_seq_.count(item.connection) ? last_seq_[item.connection] : 0;
       item.subscriber->send_pose(encode_pose_frame(*session_, frame_id_, seq));
       subscribers_[item.connection] = std::move(item.subscriber);
@@ -189,22 +198,26 @@ void SessionActor::process(Item& item) {
       item.call(*session_);
       if (item.edit) after_edit();
       break;
-    case Item::Kind::kMessage: {
-      ClientMessage& m = item.message;
-      try {
-        m.edit(*session_);
-      } catch (const std::exception& e) {
-        send_to(item.connection, error_message(m.id, e.what()));
-        break;
-      }
-      if (!m.id.is_null()) send_to(item.connection, ack_message(m.id, m.type));
-      if (m.type != "drag_begin") after_edit();
+    case Item::Kind::kMessage:
+      apply_request(item.connection, item.request);
       break;
-    }
     case Item::Kind::kDrag:
       apply_drag(item.drag);
       break;
   }
+}
+
+void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& request) {
+  try {
+    apply(*session_, request.message);
+  } catch (const std::exception& e) {
+    send_to(connection, error_message(request.id, e.what()));
+    return;
+  }
+  if (!request.id.is_null())
+    send_to(connection, ack_message(request.id, message_type(request.message)));
+  // a drag shows in the pose frames; anything else may change what `state` carries
+  if (!std::holds_alternative<DragBegin>(request.message)) after_edit();
 }
 
 void SessionActor::after_edit() {

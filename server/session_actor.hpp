@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "animator/session.hpp"
+#include "server/messages.hpp"
 #include "server/protocol.hpp"
 
 namespace server {
@@ -67,8 +68,10 @@ class SessionActor {
   /// Adds a connection: it gets the snapshot, then pose frames and `state`/`report` messages.
   void subscribe(std::uint64_t connection, std::shared_ptr<SessionSubscriber> subscriber);
   void unsubscribe(std::uint64_t connection);
-  /// A decoded client message of `connection` (not `hello`).
-  void post(std::uint64_t connection, ClientMessage message);
+  /// A decoded client message of `connection` (not `hello`): a `drag_move` goes into the
+  /// mailbox, anything else on the ordered queue, to be applied by apply() (apply_message.hpp)
+  /// and answered with `ack` or `error` when it has an id.
+  void post(std::uint64_t connection, ClientRequest request);
 
   /// Runs `f` on the actor thread and returns its result (exceptions are rethrown here).
   /// `edit`: the call may change the document; then the session is saved and `state` sent.
@@ -108,7 +111,7 @@ class SessionActor {
   struct Item {
     enum class Kind { kMessage, kDrag, kSubscribe, kUnsubscribe, kCall } kind = Kind::kMessage;
     std::uint64_t connection = 0;
-    ClientMessage message;
+    ClientRequest request;
     DragSample drag;
     std::shared_ptr<SessionSubscriber> subscriber;
     std::function<void(animator::Session&)> call;
@@ -119,6 +122,7 @@ class SessionActor {
   bool enqueue(Item item);
   void run();
   void process(Item& item);
+  void apply_request(std::uint64_t connection, const ClientRequest& request);
   bool apply_drag(DragSample& sample);
   void tick();
   void broadcast_pose();

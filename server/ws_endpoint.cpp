@@ -89,7 +89,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
     parser_->header_limit(8 * 1024);
     parser_->body_limit(4 * 1024);
     http::async_read(ws_.next_layer(), buffer_, *parser_,
-                     [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_upgrade_request(ec); });
+                     [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                       self->on_upgrade_request(ec);
+                     });
   }
 
   // --- called from actor threads -------------------------------------------------------------
@@ -142,12 +144,14 @@ class Connection : public std::enable_shared_from_this<Connection> {
     auto res = std::make_shared<http::response<http::string_body>>(status, 11);
     res->set(http::field::content_type, "application/json");
     res->set(http::field::connection, "close");
-    res->body() = nlohmann::json{{"error", message}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    res->body() = nlohmann::json{{"error", message}}.dump(-1, ' ', false,
+                                                          nlohmann::json::error_handler_t::replace);
     res->prepare_payload();
-    http::async_write(ws_.next_layer(), *res, [self = shared_from_this(), res](beast::error_code, std::size_t) {
-      beast::error_code ignored;
-      beast::get_lowest_layer(self->ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
-    });
+    http::async_write(
+        ws_.next_layer(), *res, [self = shared_from_this(), res](beast::error_code, std::size_t) {
+          beast::error_code ignored;
+          beast::get_lowest_layer(self->ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+        });
   }
 
   void on_upgrade_request(beast::error_code ec) {
@@ -158,12 +162,13 @@ class Connection : public std::enable_shared_from_this<Connection> {
       return refuse(http::status::forbidden, "Host: not a name of this server");
     }
     if (!websocket::is_upgrade(req)) {
-      return refuse(http::status::bad_request, "Upgrade: this port speaks WebSocket only (/ws?session=ID&token=T)");
+      return refuse(http::status::bad_request,
+                    "Upgrade: this port speaks WebSocket only (/ws?session=ID&token=T)");
     }
     const auto origin = req.find(http::field::origin);
     if (origin != req.end() && !endpoint_.policy.origin_allowed(std::string(origin->value()))) {
-      return refuse(http::status::forbidden,
-                    "Origin: not this server's page (rule: exactly " + endpoint_.policy.page_origin() + ")");
+      return refuse(http::status::forbidden, "Origin: not this server's page (rule: exactly " +
+                                                 endpoint_.policy.page_origin() + ")");
     }
     std::string session, token;
     if (!parse_target(std::string(req.target()), session, token)) {
@@ -172,7 +177,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
     if (!is_valid_id(session)) return refuse(http::status::not_found, "session: no such session");
     const SessionLookup found = endpoint_.registry.find(session, token);
     if (found.status == 404) return refuse(http::status::not_found, "session: no such session");
-    if (found.status != 200) return refuse(http::status::unauthorized, "token: missing or wrong session token");
+    if (found.status != 200)
+      return refuse(http::status::unauthorized, "token: missing or wrong session token");
     actor_ = found.actor;
 
     beast::get_lowest_layer(ws_).expires_never();
@@ -189,26 +195,29 @@ class Connection : public std::enable_shared_from_this<Connection> {
 
   void read_next() {
     in_.clear();
-    ws_.async_read(in_, [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
+    ws_.async_read(
+        in_, [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
   }
 
   void on_read(beast::error_code ec) {
     if (ec) return;  // closed, or too big (Beast has sent close 1009), or the socket failed
     if (!ws_.got_text()) {
-      queue_text(error_message(nullptr, "message: binary frames are not accepted from clients (rule: JSON text)"));
+      queue_text(error_message(
+          nullptr, "message: binary frames are not accepted from clients (rule: JSON text)"));
       return read_next();
     }
     const std::string text = beast::buffers_to_string(in_.data());
-    ClientMessage message;
+    ClientRequest request;
     try {
-      message = parse_client_message(text, actor_->model());
+      request = parse_client_message(text);
     } catch (const ProtocolError& e) {
       queue_text(error_message(e.id, e.what()));
       return read_next();
     }
-    if (message.type == "hello") {
-      if (message.protocol != kProtocolVersion) {
-        ws_.async_close(websocket::close_reason(websocket::close_code::protocol_error, "unsupported protocol version"),
+    if (const auto* hello = std::get_if<Hello>(&request.message)) {
+      if (hello->protocol != kProtocolVersion) {
+        ws_.async_close(websocket::close_reason(websocket::close_code::protocol_error,
+                                                "unsupported protocol version"),
                         [self = shared_from_this()](beast::error_code) {});
         return read_next();
       }
@@ -216,15 +225,16 @@ class Connection : public std::enable_shared_from_this<Connection> {
         subscribed_ = true;
         actor_->subscribe(id_, std::make_shared<Subscriber>(weak_from_this()));
       } else {
-        queue_text(error_message(message.id, "hello: sent twice on one connection"));
+        queue_text(error_message(request.id, "hello: sent twice on one connection"));
       }
       return read_next();
     }
     if (!subscribed_) {
-      queue_text(error_message(message.id, "message: send hello first (rule: the first message is hello)"));
+      queue_text(error_message(request.id,
+                               "message: send hello first (rule: the first message is hello)"));
       return read_next();
     }
-    actor_->post(id_, std::move(message));
+    actor_->post(id_, std::move(request));
     read_next();
   }
 
@@ -252,11 +262,12 @@ class Connection : public std::enable_shared_from_this<Connection> {
     }
     writing_ = true;
     ws_.text(out_is_text_);
-    ws_.async_write(asio::buffer(out_), [self = shared_from_this()](beast::error_code ec, std::size_t) {
-      self->writing_ = false;
-      if (ec) return;
-      self->write_next();
-    });
+    ws_.async_write(asio::buffer(out_),
+                    [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                      self->writing_ = false;
+                      if (ec) return;
+                      self->write_next();
+                    });
   }
 
   websocket::stream<beast::tcp_stream> ws_;

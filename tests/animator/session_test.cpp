@@ -110,7 +110,8 @@ TEST(Session, BadRequestsAreRefusedWithoutChangingAnything) {
   try {
     s.drag_begin(999, Vector3::Zero());
   } catch (const SessionError& e) {
-    EXPECT_NE(std::string(e.what()).find("drag_begin.link"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("link: link index 999 is out of range"),
+              std::string::npos);
   }
   EXPECT_EQ(session_to_json(s), before);
   EXPECT_EQ(s.history().size(), 0u);

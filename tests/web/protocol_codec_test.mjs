@@ -1,7 +1,9 @@
 // The page's pure modules in Node: the binary pose frame codec of docs/protocol.md (layout checked
 // byte by byte against an independent DataView reading, and every malformed frame refused with a
-// message), frame-id ordering across the u32 wrap, the message builders, and the joint-range
-// geometry (swing–twist decomposition recomposed, hinge angles, the range test of human48's lumbar).
+// message), frame-id ordering across the u32 wrap, the message builders (against the
+// CLIENT_MESSAGES table, which tests/server/protocol_test.cpp compares with the server), and the
+// joint-range geometry (swing–twist decomposition recomposed, hinge angles, the range test of
+// human48's lumbar).
 // Usage: node tests/web/protocol_codec_test.mjs
 
 import { test } from 'node:test';
@@ -88,6 +90,55 @@ test('message builders follow the protocol tables', () => {
     const built = m.length === 0 ? m() : null;
     if (built) assert.equal(typeof built.type, 'string');
   }
+});
+
+test('the builders send exactly the message types and fields of CLIENT_MESSAGES', () => {
+  const { CLIENT_MESSAGES } = protocol;
+  // every builder, with all of its optional arguments
+  const full = {
+    hello: [],
+    dragBegin: ['r_hand', [0, 1, 0], [0, 0, 0.1]],
+    dragMove: [1, [0, 1, 0], [1, 0, 0, 0]],
+    dragEnd: [],
+    pin: ['l_foot', 'pose', [0, 0, 0.02]],
+    unpin: ['l_foot'],
+    movePin: ['l_foot', [0, 0.1, 0], [1, 0, 0, 0]],
+    setSettings: [{ iterations: 3 }],
+    setEffects: [{ gravity: false }],
+    keyInsert: [0.5, 'step'],
+    keyDelete: [0],
+    keyMove: [0, 1],
+    bakeKeys: [30],
+    record: [true],
+    play: [],
+    pause: [],
+    seek: [1],
+    setLoop: [true, 0, 2],
+    setSpeed: [1],
+    layerMute: [0, true],
+    layerWeight: [0, 0.5],
+    layerRemove: [0],
+    bakeLayers: [],
+    setFalloff: [0.5],
+    undo: [],
+    redo: [],
+  };
+  assert.deepEqual(Object.keys(full).sort(), Object.keys(msg).sort(), 'a builder without arguments here');
+  const sent = {};
+  for (const [name, args] of Object.entries(full)) {
+    const m = msg[name](...args);
+    assert.ok(Object.hasOwn(CLIENT_MESSAGES, m.type), `msg.${name} sends type '${m.type}', not in CLIENT_MESSAGES`);
+    sent[m.type] ??= new Set();
+    for (const key of Object.keys(m)) if (key !== 'type') sent[m.type].add(key);
+  }
+  for (const [type, fields] of Object.entries(CLIENT_MESSAGES)) {
+    assert.deepEqual([...(sent[type] ?? [])].sort(), [...fields].sort(), `fields of ${type}`);
+  }
+  // the table is JSON, as the C++ side reads it from the source text
+  const source = fs.readFileSync(path.join(WEB_DIR, 'js/protocol.js'), 'utf8');
+  const start = source.indexOf('export const CLIENT_MESSAGES = ') + 'export const CLIENT_MESSAGES = '.length;
+  const end = source.indexOf('\n};', start) + 2;
+  assert.deepEqual(JSON.parse(source.slice(start, end)), CLIENT_MESSAGES);
 });
 
 test('swing–twist decomposition recomposes to the rotation', () => {

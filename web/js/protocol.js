@@ -12,6 +12,39 @@ export const PIN_MODES = ['position', 'orientation', 'pose'];
 export const INTERPOLATIONS = ['step', 'linear', 'smooth'];
 export const EXPORT_FORMATS = ['bvh', 'gltf', 'glb'];
 
+/**
+ * Every client → server message type and its fields besides `type` and `id` (docs/protocol.md),
+ * in the order of the protocol table. Data only, written as JSON: tests/server/protocol_test.cpp
+ * reads it from this file and compares it with the server's message structs, and
+ * tests/web/protocol_codec_test.mjs checks that the builders in `msg` send exactly these.
+ */
+export const CLIENT_MESSAGES = {
+  "hello": ["protocol"],
+  "drag_begin": ["link", "target", "point"],
+  "drag_move": ["seq", "target", "rotation"],
+  "drag_end": [],
+  "pin": ["link", "mode", "point"],
+  "unpin": ["link"],
+  "move_pin": ["link", "target", "rotation"],
+  "set_settings": ["settings"],
+  "set_effects": ["scene"],
+  "key_insert": ["time", "interpolation"],
+  "key_delete": ["index"],
+  "key_move": ["index", "time"],
+  "bake_keys": ["rate"],
+  "record": ["on"],
+  "play": [],
+  "pause": [],
+  "seek": ["time"],
+  "set_loop": ["loop", "start", "end"],
+  "set_speed": ["speed"],
+  "layer": ["index", "muted", "weight", "remove"],
+  "bake_layers": [],
+  "set_falloff": ["seconds"],
+  "undo": [],
+  "redo": []
+};
+
 const vec3 = (v) => [Number(v[0]), Number(v[1]), Number(v[2])];
 const quat = (q) => [Number(q[0]), Number(q[1]), Number(q[2]), Number(q[3])];
 

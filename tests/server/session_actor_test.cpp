@@ -1,0 +1,255 @@
+// Tests for server/session_actor.hpp without sockets: edits run in the order posted, drag samples
+// are coalesced (latest wins) and flushed before a later command, and call() returns results,
+// rethrows exceptions, and saves and announces edits.
+#include "server/session_actor.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <condition_variable>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <mutex>
+#include <thread>
+
+#include "io/bundled_characters.hpp"
+
+namespace {
+
+using nlohmann::json;
+using server::ClientRequest;
+namespace fs = std::filesystem;
+
+constexpr auto kPatience = std::chrono::seconds(10);
+
+// Polls `done` until it holds or kPatience has passed.
+bool eventually(const std::function<bool()>& done) {
+  const auto deadline = std::chrono::steady_clock::now() + kPatience;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+// A connection as the actor sees it: keeps every text message (parsed) and pose frame.
+class Recorder final : public server::SessionSubscriber {
+ public:
+  void send_text(std::string message) override {
+    std::lock_guard lock(mutex_);
+    texts_.push_back(json::parse(message));
+    changed_.notify_all();
+  }
+  void send_pose(std::string frame) override {
+    std::lock_guard lock(mutex_);
+    poses_.push_back(std::move(frame));
+    changed_.notify_all();
+  }
+  // Waits (kPatience at most) until an `ack` or `error` with this id has arrived.
+  bool wait_for_answer(const json& id) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, kPatience, [&] {
+      for (const json& t : texts_) {
+        if ((t.at("type") == "ack" || t.at("type") == "error") && t.value("id", json()) == id)
+          return true;
+      }
+      return false;
+    });
+  }
+  // ("ack" | "error", id) of every answer, in arrival order
+  std::vector<std::pair<std::string, json>> answers() const {
+    std::lock_guard lock(mutex_);
+    std::vector<std::pair<std::string, json>> out;
+    for (const json& t : texts_) {
+      if (t.at("type") == "ack" || t.at("type") == "error") {
+        out.emplace_back(t.at("type").get<std::string>(), t.value("id", json()));
+      }
+    }
+    return out;
+  }
+  std::vector<json> texts_of_type(const std::string& type) const {
+    std::lock_guard lock(mutex_);
+    std::vector<json> out;
+    for (const json& t : texts_) {
+      if (t.at("type") == type) out.push_back(t);
+    }
+    return out;
+  }
+  // the "last applied drag_move seq" of the newest pose frame
+  std::uint32_t last_pose_seq() const {
+    std::lock_guard lock(mutex_);
+    std::uint32_t seq = 0;
+    if (!poses_.empty()) std::memcpy(&seq, poses_.back().data() + server::kPoseSeqOffset, 4);
+    return seq;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<json> texts_;
+  std::vector<std::string> poses_;
+};
+
+class SessionActorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    save_path_ = (fs::temp_directory_path() /
+                  ("pindrag-actor-test-" + std::to_string(::getpid()) + "-" +
+                   ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".json"))
+                     .string();
+    fs::remove(save_path_);
+    auto model = io::load_character("human48").model;
+    actor_ = std::make_unique<server::SessionActor>(
+        "0123456789abcdef0123456789abcdef", std::make_unique<animator::Session>(model, "human48"),
+        save_path_);
+    actor_->subscribe(1, recorder_);
+  }
+  void TearDown() override {
+    actor_.reset();
+    std::error_code ec;
+    fs::remove(save_path_, ec);
+  }
+
+  // Posts a text frame from connection 1 (or another).
+  void post(const json& message, std::uint64_t connection = 1) {
+    actor_->post(connection, server::parse_client_message(message.dump()));
+  }
+  server::Position hand() {
+    return actor_->call([](animator::Session& s) {
+      const core::Vector3 p = s.kinematics().X_W[s.model().link_index("r_hand")].p;
+      return server::Position{p.x(), p.y(), p.z()};
+    });
+  }
+  // Holds the actor thread inside a call until the returned function is called.
+  std::function<void()> block_actor() {
+    auto entered = std::make_shared<std::promise<void>>();
+    auto release = std::make_shared<std::promise<void>>();
+    auto released = release->get_future().share();
+    blocker_ = std::thread([this, entered, released] {
+      actor_->call([&](animator::Session&) {
+        entered->set_value();
+        released.wait();
+      });
+    });
+    entered->get_future().wait();
+    return [this, release] {
+      release->set_value();
+      blocker_.join();
+    };
+  }
+
+  std::string save_path_;
+  std::shared_ptr<Recorder> recorder_ = std::make_shared<Recorder>();
+  std::unique_ptr<server::SessionActor> actor_;
+  std::thread blocker_;
+};
+
+TEST_F(SessionActorTest, EditsRunInTheOrderPostedAndARefusalStopsNothing) {
+  std::vector<std::pair<std::string, json>> expected;
+  for (int id = 1; id <= 21; ++id) {
+    if (id == 11) {
+      post({{"type", "key_delete"}, {"index", 99}, {"id", id}});  // no such key
+      expected.emplace_back("error", id);
+    } else {
+      post({{"type", "key_insert"}, {"time", 0.1 * id}, {"id", id}});
+      expected.emplace_back("ack", id);
+    }
+  }
+  ASSERT_TRUE(recorder_->wait_for_answer(21));
+  EXPECT_EQ(recorder_->answers(), expected);
+  const auto keys = actor_->call([](animator::Session& s) { return s.keys().keys().size(); });
+  EXPECT_EQ(keys, 20u);
+  // every applied edit announced the new state; the refusal named its field
+  EXPECT_EQ(recorder_->texts_of_type("state").size(), 20u);
+  EXPECT_EQ(recorder_->texts_of_type("error").at(0).at("message"), "key_delete.index: no key 99");
+  EXPECT_EQ(recorder_->texts_of_type("snapshot").size(), 1u);
+}
+
+TEST_F(SessionActorTest, DragSamplesAreCoalescedAndFlushedBeforeALaterCommand) {
+  const server::Position p = hand();
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
+  ASSERT_TRUE(recorder_->wait_for_answer(1));
+  const server::ActorStats before = actor_->stats();
+
+  // while the actor is busy, 50 samples arrive, then drag_end
+  const auto release = block_actor();
+  for (std::uint32_t seq = 1; seq <= 50; ++seq) {
+    post({{"type", "drag_move"},
+          {"seq", seq},
+          {"target", {p[0], p[1] + 0.001 * seq, p[2]}},
+          {"id", 100 + seq}});
+  }
+  post({{"type", "drag_end"}, {"id", 2}});
+  release();
+  ASSERT_TRUE(recorder_->wait_for_answer(2));
+
+  // one sample applied (the newest), before the drag_end, and every id acknowledged in order
+  const server::ActorStats after = actor_->stats();
+  EXPECT_EQ(after.drag_samples_received - before.drag_samples_received, 50u);
+  EXPECT_EQ(after.drag_samples_applied - before.drag_samples_applied, 1u);
+  std::vector<std::pair<std::string, json>> expected{{"ack", 1}};
+  for (int id = 101; id <= 150; ++id) expected.emplace_back("ack", id);
+  expected.emplace_back("ack", 2);
+  EXPECT_EQ(recorder_->answers(), expected);
+  actor_->call([](animator::Session&) {});  // the pose frame of the drag_end went out before
+  EXPECT_EQ(recorder_->last_pose_seq(), 50u);
+
+  // a sample not newer than the last applied one is refused
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 3}});
+  post({{"type", "drag_move"}, {"seq", 50}, {"target", p}, {"id", 4}});
+  ASSERT_TRUE(recorder_->wait_for_answer(4));
+  const json error = recorder_->texts_of_type("error").at(0);
+  EXPECT_EQ(error.at("id"), 4);
+  EXPECT_EQ(error.at("message").get<std::string>().rfind(
+                "drag_move.seq: must increase per connection", 0),
+            0u);
+}
+
+TEST_F(SessionActorTest, SamplesOfAnotherConnectionAreNotSuperseded) {
+  auto other = std::make_shared<Recorder>();
+  actor_->subscribe(2, other);
+  const server::Position p = hand();
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
+  ASSERT_TRUE(recorder_->wait_for_answer(1));
+  const server::ActorStats before = actor_->stats();
+  const auto release = block_actor();
+  post({{"type", "drag_move"}, {"seq", 1}, {"target", p}, {"id", 10}}, 1);
+  post({{"type", "drag_move"}, {"seq", 1}, {"target", p}, {"id", 20}}, 2);
+  post({{"type", "drag_move"}, {"seq", 2}, {"target", p}, {"id", 11}}, 1);
+  release();
+  ASSERT_TRUE(recorder_->wait_for_answer(11));
+  ASSERT_TRUE(other->wait_for_answer(20));
+  EXPECT_EQ(actor_->stats().drag_samples_applied - before.drag_samples_applied, 3u);
+  EXPECT_EQ(other->answers(), (std::vector<std::pair<std::string, json>>{{"ack", 20}}));
+}
+
+TEST_F(SessionActorTest, CallReturnsResultsRethrowsAndSavesEdits) {
+  EXPECT_EQ(actor_->call([](animator::Session& s) { return s.character(); }), "human48");
+  EXPECT_THROW(actor_->call([](animator::Session& s) { s.key_delete(3); }), animator::SessionError);
+  EXPECT_THROW(actor_->call([](animator::Session&) -> int { throw std::logic_error("no"); }),
+               std::logic_error);
+  EXPECT_TRUE(recorder_->texts_of_type("state").empty());
+
+  // an edit through call(): saved, and announced as `state` (both after the result is back)
+  const std::uint64_t saves = actor_->stats().saves;
+  const int index =
+      actor_->call([](animator::Session& s) { return s.key_insert(0.5); }, /*edit=*/true);
+  EXPECT_EQ(index, 0);
+  EXPECT_TRUE(eventually([&] { return actor_->stats().saves > saves; }));
+  EXPECT_TRUE(fs::exists(save_path_));
+  EXPECT_TRUE(eventually([&] { return !recorder_->texts_of_type("state").empty(); }));
+  const std::vector<json> states = recorder_->texts_of_type("state");
+  ASSERT_EQ(states.size(), 1u);
+  EXPECT_EQ(states[0].at("keys").size(), 1u);
+
+  actor_->stop();
+  try {
+    actor_->call([](animator::Session&) {});
+    ADD_FAILURE() << "a call after stop() ran";
+  } catch (const animator::SessionError& e) {
+    EXPECT_NE(std::string(e.what()).find("shutting down"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
