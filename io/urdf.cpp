@@ -12,7 +12,8 @@
 #include "io/urdf_urdfdom.hpp"
 
 // A URDF is read in three passes over its text, each in its own file:
-//   1. urdf_urdfdom.cpp: the nesting rule (kMaxUrdfDepth), checked before any XML parser runs;
+//   1. urdf_urdfdom.cpp: the XML rules (kMaxUrdfDepth, kMaxUrdfAttributes) that bound the XML
+//      parsers' work, checked before any of them runs;
 //   2. tinyxml2, here, for well-formedness with a line number, and urdf_scan.cpp for what urdfdom
 //      drops (warnings, capsules, repeated joint names, the tree);
 //   3. urdfdom (urdf_urdfdom.cpp) on the document as tinyxml2 prints it back, so both see the
@@ -92,8 +93,10 @@ LoadResult load_urdf_string(const std::string& xml,
     fail(src, {"file is " + std::to_string(xml.size()) + " bytes (rule: a URDF is at most " +
                std::to_string(kMaxUrdfBytes) + " bytes)"});
   }
-  // the one nesting check, before any recursive parser sees the text
-  if (std::optional<std::string> deep = urdf_internal::nesting_violation(xml)) fail(src, {*deep});
+  // the one check of the XML rules, before any XML parser sees the text
+  if (std::optional<std::string> broken = urdf_internal::xml_rules_violation(xml)) {
+    fail(src, {*broken});
+  }
 
   // well-formed XML first (tinyxml2 gives a line); urdfdom's own message goes with it
   tinyxml2::XMLDocument doc(true, tinyxml2::PRESERVE_WHITESPACE);

@@ -41,6 +41,10 @@ constexpr std::size_t kMaxUrdfWarnings = 1000;
 /// is refused before any XML parser sees it: urdfdom's parser, TinyXML 1, recurses once per
 /// level without a limit, and about 37,000 levels (120 KB) overflow an 8 MB stack.
 constexpr int kMaxUrdfDepth = 64;
+/// Most attributes on one element (URDF elements have at most 6). More are refused before any
+/// XML parser sees them: both parsers check each attribute against all earlier ones of its
+/// element, and 200,000 attributes (2 MB) take minutes.
+constexpr int kMaxUrdfAttributes = 64;
 
 /// Change of basis from URDF (Z-up) to pindrag (Y-up) coordinates: v_ours = C v_urdf with
 /// C = [[0,1,0],[0,0,1],[1,0,0]] (ROS x forward → our +Z, y left → our +X, z up → our +Y).

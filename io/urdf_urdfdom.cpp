@@ -11,7 +11,7 @@
 #include <unordered_set>
 
 #include "io/urdf.hpp"
-#include "io/xml_depth.hpp"
+#include "io/xml_prescan.hpp"
 
 namespace io::urdf_internal {
 
@@ -81,16 +81,25 @@ std::string nesting_message(int line) {
          " deep)";
 }
 
-std::optional<std::string> nesting_violation(const std::string& xml) {
-  const XmlNesting nesting = tinyxml_nesting(xml, kMaxUrdfDepth);
-  if (nesting.depth <= kMaxUrdfDepth) return std::nullopt;
-  return nesting_message(nesting.line);
+std::optional<std::string> xml_rules_violation(const std::string& xml) {
+  const XmlPrescan scan = prescan_xml(xml, {kMaxUrdfDepth, kMaxUrdfAttributes});
+  switch (scan.excess) {
+    case XmlPrescan::Excess::kNone:
+      return std::nullopt;
+    case XmlPrescan::Excess::kDepth:
+      return nesting_message(scan.line);
+    case XmlPrescan::Excess::kAttributes:
+      break;
+  }
+  const std::string n = std::to_string(kMaxUrdfAttributes);
+  return "line " + std::to_string(scan.line) + ": an element has more than " + n +
+         " attributes (rule: an XML element of a URDF has at most " + n + " attributes)";
 }
 
 UrdfdomResult run_urdfdom(const std::string& xml) {
   UrdfdomResult out;
-  if (std::optional<std::string> deep = nesting_violation(xml)) {
-    out.errors.push_back(std::move(*deep));
+  if (std::optional<std::string> broken = xml_rules_violation(xml)) {
+    out.errors.push_back(std::move(*broken));
     return out;
   }
   std::vector<UrdfdomMessage> messages;
@@ -107,7 +116,7 @@ UrdfdomResult run_urdfdom(const std::string& xml) {
 }
 
 bool tinyxml_accepts(const std::string& xml) {
-  if (nesting_violation(xml)) return false;
+  if (xml_rules_violation(xml)) return false;
   TiXmlDocument doc;
   doc.Parse(tinyxml_input(xml).c_str());
   return !doc.Error();

@@ -1,9 +1,10 @@
 // The URDF loader's side of urdfdom and of TinyXML 1, the XML parser urdfdom uses (internal to
-// io/urdf*.cpp): the nesting rule that keeps TinyXML 1's recursion bounded, urdf::parseURDF with
-// its console_bridge messages captured, and TinyXML 1's verdict on text tinyxml2 refused.
+// io/urdf*.cpp): the XML rules that bound the XML parsers' work (kMaxUrdfDepth,
+// kMaxUrdfAttributes), urdf::parseURDF with its console_bridge messages captured, and TinyXML 1's
+// verdict on text tinyxml2 refused.
 //
-// Every call that hands text to TinyXML 1 checks the nesting rule first and passes the text
-// through tinyxml_input(), so no text nested deeper than kMaxUrdfDepth reaches TinyXML 1.
+// Every call that hands text to TinyXML 1 checks the rules first and passes the text through
+// tinyxml_input(), so no text beyond them reaches TinyXML 1.
 #pragma once
 
 #include <urdf_model/model.h>
@@ -16,11 +17,12 @@
 
 namespace io::urdf_internal {
 
-/// The nesting rule: nullopt when TinyXML 1 would nest `xml` at most kMaxUrdfDepth deep, else
-/// "line L: elements are nested deeper than N (rule: ...)".
-std::optional<std::string> nesting_violation(const std::string& xml);
+/// The XML rules, checked by prescan_xml(): nullopt when `xml` keeps them, else the first
+/// violation, "line L: elements are nested deeper than N (rule: ...)" or "line L: an element has
+/// more than N attributes (rule: ...)".
+std::optional<std::string> xml_rules_violation(const std::string& xml);
 
-/// The message of nesting_violation() for a refusal found elsewhere (tinyxml2's own limit).
+/// The nesting message of xml_rules_violation(), for a refusal found by tinyxml2's own limit.
 std::string nesting_message(int line);
 
 /// What urdf::parseURDF made of a text.
@@ -31,12 +33,12 @@ struct UrdfdomResult {
 };
 
 /// urdf::parseURDF(xml) with console_bridge's output captured. Parses are serialized: urdfdom
-/// reports through console_bridge's process-wide output handler. Text that breaks the nesting
-/// rule is not parsed; the violation is the one error.
+/// reports through console_bridge's process-wide output handler. Text that breaks the XML rules
+/// is not parsed; the violation is the one error.
 UrdfdomResult run_urdfdom(const std::string& xml);
 
-/// Whether TinyXML 1 parses `xml` without an error (false, unparsed, when it breaks the nesting
-/// rule).
+/// Whether TinyXML 1 parses `xml` without an error (false, unparsed, when it breaks the XML
+/// rules).
 bool tinyxml_accepts(const std::string& xml);
 
 /// Frees a urdfdom model's links even when they form a cycle: urdfdom links own their children

@@ -1,7 +1,7 @@
 // Tests for io/urdf.hpp and io/model_file.hpp: frame conversion, joint and root
 // handling, warnings for what is not imported, mesh resolution, every URDF of the shared data and
 // benchmark folders, Jacobians against finite differences, a corpus of malformed files, and the
-// nesting limit (with io/xml_depth.hpp, the nesting TinyXML 1 would reach).
+// XML limits (with io/xml_prescan.hpp, what the XML parsers would build).
 #include "io/urdf.hpp"
 
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 #include "core/configuration.hpp"
 #include "io/character_json.hpp"
 #include "io/model_file.hpp"
-#include "io/xml_depth.hpp"
+#include "io/xml_prescan.hpp"
 #include "core/kinematics.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/fixtures/kinematics_checks.hpp"
@@ -1023,28 +1023,64 @@ TEST(UrdfNesting, NestingThatOnlyUrdfdomsParserSeesIsRefused) {
   EXPECT_EQ(error_of([&] { load(lead_bytes); }), "test.urdf: " + nesting_error(2));
 }
 
-TEST(XmlNesting, CountsElementsAsTinyXml1ReadsThem) {
-  using io::tinyxml_nesting;
-  EXPECT_EQ(tinyxml_nesting("<a><b/><c><d/></c></a>", 64).depth, 3);
-  EXPECT_EQ(tinyxml_nesting("", 64).depth, 0);
-  // markup in values, comments and CDATA is not an element
-  EXPECT_EQ(tinyxml_nesting("<a x=\"<b><b>\"><!-- <c><c> --><![CDATA[<d><d>]]></a>", 64).depth, 1);
-  // TinyXML 1's own reading: an instruction ends at its first '>'; "&#x...;" skips to its ';'
-  EXPECT_EQ(tinyxml_nesting("<?pi <x><b><c>?>", 64).depth, 2);
-  EXPECT_EQ(tinyxml_nesting("<a>&#x</a>x1;<b/></a>", 64).depth, 2);
-  // a lead byte hides the end tag in UTF-8 mode: after a declaration or a byte-order mark only
-  EXPECT_EQ(tinyxml_nesting("<a>\xF0</a><b/>", 64).depth, 1);
-  EXPECT_EQ(tinyxml_nesting("<?xml version=\"1.0\"?><a>\xF0</a><b/>", 64).depth, 2);
-  EXPECT_EQ(tinyxml_nesting("\xEF\xBB\xBF<a>\xF0</a><b/>", 64).depth, 2);
-  // TinyXML 1 reads a C string: nothing after the first NUL
-  EXPECT_EQ(tinyxml_nesting(std::string_view("<a>\0<b><c>", 10), 64).depth, 1);
+TEST(UrdfXmlLimits, ManyAttributesOnOneElementAreRefusedBeforeParsing) {
+  // both XML parsers compare each attribute with every earlier one of its element: 200,000 of
+  // them took minutes
+  auto link = [](int attributes) {
+    std::string text = "<robot name=\"r\">\n<link name=\"base\"";
+    for (int i = 1; i < attributes; ++i) text += " a" + std::to_string(i) + "=\"1\"";
+    return text + "/>\n</robot>\n";
+  };
+  EXPECT_EQ(load(link(io::kMaxUrdfAttributes)).model->nlinks(), 1);
+  const std::string n = std::to_string(io::kMaxUrdfAttributes);
+  const std::string refused = "test.urdf: line 2: an element has more than " + n +
+                              " attributes (rule: an XML element of a URDF has at most " + n +
+                              " attributes)";
+  EXPECT_EQ(error_of([&] { load(link(io::kMaxUrdfAttributes + 1)); }), refused);
+  EXPECT_EQ(error_of([&] { load(link(200000)); }), refused);
 }
 
-TEST(XmlNesting, StopsAtTheFirstElementDeeperThanTheLimitAndNamesItsLine) {
-  const io::XmlNesting n = io::tinyxml_nesting("<a>\n<b>\n<c>\n<d>", 2);
-  EXPECT_EQ(n.depth, 3);
-  EXPECT_EQ(n.line, 3);
-  EXPECT_EQ(io::tinyxml_nesting("<a>\n<b>\n<c>\n<d>", 4).line, 0);
+// prescan_xml with room for anything but what a test is about
+io::XmlPrescan prescan(std::string_view text, int depth = 64, int attributes = 64) {
+  return io::prescan_xml(text, {depth, attributes});
+}
+
+TEST(XmlPrescan, CountsElementsAsTinyXml1ReadsThem) {
+  EXPECT_EQ(prescan("<a><b/><c><d/></c></a>").depth, 3);
+  EXPECT_EQ(prescan("").depth, 0);
+  // markup in values, comments and CDATA is not an element
+  EXPECT_EQ(prescan("<a x=\"<b><b>\"><!-- <c><c> --><![CDATA[<d><d>]]></a>").depth, 1);
+  // TinyXML 1's own reading: an instruction ends at its first '>'; "&#x...;" skips to its ';'
+  EXPECT_EQ(prescan("<?pi <x><b><c>?>").depth, 2);
+  EXPECT_EQ(prescan("<a>&#x</a>x1;<b/></a>").depth, 2);
+  // a lead byte hides the end tag in UTF-8 mode: after a declaration or a byte-order mark only
+  EXPECT_EQ(prescan("<a>\xF0</a><b/>").depth, 1);
+  EXPECT_EQ(prescan("<?xml version=\"1.0\"?><a>\xF0</a><b/>").depth, 2);
+  EXPECT_EQ(prescan("\xEF\xBB\xBF<a>\xF0</a><b/>").depth, 2);
+  // both parsers read a C string: nothing after the first NUL
+  EXPECT_EQ(prescan(std::string_view("<a>\0<b><c>", 10)).depth, 1);
+}
+
+TEST(XmlPrescan, CountsAttributesAsEitherParserReadsThem) {
+  EXPECT_EQ(prescan("<a x=\"1\" y='2'><b z=\"3\"/></a>").attributes, 2);
+  // TinyXML 1 takes unquoted values; tinyxml2 reads attributes in an end tag
+  EXPECT_EQ(prescan("<a x=1 y=2 z=3/>").attributes, 3);
+  EXPECT_EQ(prescan("<a></a x=\"1\" y=\"2\">").attributes, 2);
+  // TinyXML 1 stops at "&#xg;", but tinyxml2 goes on to the element after it
+  EXPECT_EQ(prescan("<a x=\"&#xg;\"/><b x=\"1\" y=\"2\" z=\"3\"/>").attributes, 3);
+}
+
+TEST(XmlPrescan, StopsAtTheFirstElementBeyondALimitAndNamesItsLine) {
+  const io::XmlPrescan deep = prescan("<a>\n<b>\n<c>\n<d>", 2);
+  EXPECT_EQ(deep.excess, io::XmlPrescan::Excess::kDepth);
+  EXPECT_EQ(deep.depth, 3);
+  EXPECT_EQ(deep.line, 3);
+  EXPECT_EQ(prescan("<a>\n<b>\n<c>\n<d>", 4).excess, io::XmlPrescan::Excess::kNone);
+  EXPECT_EQ(prescan("<a>\n<b>\n<c>\n<d>", 4).line, 0);
+  const io::XmlPrescan wide = prescan("<a>\n<b x='1' y='2' z='3'/></a>", 64, 2);
+  EXPECT_EQ(wide.excess, io::XmlPrescan::Excess::kAttributes);
+  EXPECT_EQ(wide.attributes, 3);
+  EXPECT_EQ(wide.line, 2);
 }
 
 // ------------------------------------------------------------------------------------------------

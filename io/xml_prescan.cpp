@@ -1,4 +1,4 @@
-#include "io/xml_depth.hpp"
+#include "io/xml_prescan.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -39,14 +39,22 @@ std::size_t utf8_length(char lead) {
   return 1;
 }
 
-// One pass of TinyXML 1's parser (TiXmlDocument::Parse and the Parse methods it calls) over the
-// text, in one encoding, keeping only the element depth. Each method below names the TinyXML
-// function it follows and returns where that function leaves the text, or kStop.
-class Scanner {
- public:
-  Scanner(std::string_view text, bool utf8, int limit) : s_(text), utf8_(utf8), limit_(limit) {}
+// 1 + the number of line breaks before `at`
+int line_at(std::string_view text, std::size_t at) {
+  const std::string_view before = text.substr(0, at);
+  return 1 + static_cast<int>(std::count(before.begin(), before.end(), '\n'));
+}
 
-  // from `i` at document level to the end, an error, or the first element deeper than the limit
+// One pass of TinyXML 1's parser (TiXmlDocument::Parse and the Parse methods it calls) over the
+// text, in one encoding, keeping only the element depth and the attribute counts. Each method
+// below names the TinyXML function it follows and returns where that function leaves the text,
+// or kStop.
+class TinyXml1Scan {
+ public:
+  TinyXml1Scan(std::string_view text, bool utf8, const XmlLimits& limits)
+      : s_(text), utf8_(utf8), limits_(limits) {}
+
+  // from `i` at document level to the end, an error, or the first element beyond a limit
   void run(std::size_t i) {
     i = skip_space(i);
     while (at(i) != '\0') {
@@ -70,8 +78,16 @@ class Scanner {
     }
   }
 
-  int max_depth() const { return max_depth_; }
-  std::size_t too_deep_at() const { return too_deep_at_; }  // kStop when never too deep
+  // what was found; `line` from `excess_at_`
+  XmlPrescan result() const {
+    XmlPrescan out;
+    out.excess = excess_;
+    out.line = excess_at_ == kStop ? 0 : line_at(s_, excess_at_);
+    out.depth = max_depth_;
+    out.attributes = max_attributes_;
+    return out;
+  }
+
   std::size_t first_declaration_end() const { return first_declaration_end_; }  // or kStop
 
  private:
@@ -169,18 +185,27 @@ class Scanner {
   }
 
   // TiXmlElement::Parse up to its content: where the tag ends, and whether content follows
-  // (false for "<name/>")
-  std::pair<std::size_t, bool> start_tag(std::size_t i) const {
-    i = name(skip_space(i + 1));
+  // (false for "<name/>"). TinyXML looks each attribute up among the earlier ones.
+  std::pair<std::size_t, bool> start_tag(const std::size_t start) {
+    std::size_t i = name(skip_space(start + 1));
     if (i == kStop || at(i) == '\0') return {kStop, false};
-    for (;;) {
+    for (int count = 1;; ++count) {
       i = skip_space(i);
       if (at(i) == '\0') return {kStop, false};
       if (at(i) == '/') return {at(i + 1) == '>' ? i + 2 : kStop, false};
       if (at(i) == '>') return {i + 1, true};
       i = attribute(i);
       if (i == kStop || at(i) == '\0') return {kStop, false};
+      max_attributes_ = std::max(max_attributes_, count);
+      if (count > limits_.attributes)
+        return {stop_at(start, XmlPrescan::Excess::kAttributes), false};
     }
+  }
+
+  std::size_t stop_at(std::size_t element, XmlPrescan::Excess excess) {
+    excess_ = excess;
+    excess_at_ = element;
+    return kStop;
   }
 
   // TiXmlDeclaration::Parse: ends at the first '>' outside the values of version, encoding and
@@ -219,12 +244,8 @@ class Scanner {
     if (starts_with(i, "<![CDATA[")) return past(i + 9, "]]>");
     if (starts_with(i, "<!") || !is_name_start(at(i + 1))) return past(i + 1, ">");
     // an element: TinyXML is one call deeper while it reads it, even when it is empty
-    if (depth_ + 1 > limit_) {
-      max_depth_ = depth_ + 1;
-      too_deep_at_ = i;
-      return kStop;
-    }
     max_depth_ = std::max(max_depth_, depth_ + 1);
+    if (depth_ + 1 > limits_.depth) return stop_at(i, XmlPrescan::Excess::kDepth);
     const auto [next, has_content] = start_tag(i);
     if (next != kStop && has_content) ++depth_;
     return next;
@@ -232,39 +253,135 @@ class Scanner {
 
   std::string_view s_;
   bool utf8_;
-  int limit_;
+  XmlLimits limits_;
   int depth_ = 0;
   int max_depth_ = 0;
-  std::size_t too_deep_at_ = kStop;
+  int max_attributes_ = 0;
+  XmlPrescan::Excess excess_ = XmlPrescan::Excess::kNone;
+  std::size_t excess_at_ = kStop;
   std::size_t first_declaration_end_ = kStop;
 };
 
-XmlNesting result_of(std::string_view text, const Scanner& scan) {
-  XmlNesting out;
-  out.depth = scan.max_depth();
-  if (scan.too_deep_at() != kStop) {
-    const std::string_view before = text.substr(0, scan.too_deep_at());
-    out.line = 1 + static_cast<int>(std::count(before.begin(), before.end(), '\n'));
+// tinyxml2's tokenizer (XMLDocument::Identify and the ParseDeep methods), counting attributes
+// only: its own depth limit keeps its recursion bounded. Markup ends at its first end mark
+// ("?>", "-->", "]]>", ">", a value's closing quote), and any error ends the parse.
+class TinyXml2Scan {
+ public:
+  TinyXml2Scan(std::string_view text, int limit) : s_(text), limit_(limit) {}
+
+  void run() {
+    std::size_t i = s_.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
+    while (i != kStop) {
+      i = skip_space(i);
+      if (i >= s_.size()) return;
+      if (s_[i] != '<') {
+        i = s_.find('<', i);  // text
+      } else if (s_.substr(i, 2) == "<?") {
+        i = past(i + 2, "?>");
+      } else if (s_.substr(i, 4) == "<!--") {
+        i = past(i + 4, "-->");
+      } else if (s_.substr(i, 9) == "<![CDATA[") {
+        i = past(i + 9, "]]>");
+      } else if (s_.substr(i, 2) == "<!") {
+        i = past(i + 2, ">");
+      } else {
+        i = tag(i);
+      }
+    }
   }
+
+  int max_attributes() const { return max_; }
+  std::size_t too_many_at() const { return too_many_at_; }  // kStop when never too many
+
+ private:
+  char at(std::size_t i) const { return i < s_.size() ? s_[i] : '\0'; }
+
+  // XMLUtil::IsNameStartChar, IsNameChar and IsWhiteSpace
+  static bool is_name_start(char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u >= 128 || std::isalpha(u) || c == ':' || c == '_';
+  }
+  static bool is_name_char(char c) {
+    return is_name_start(c) || is_digit(c) || c == '.' || c == '-';
+  }
+  std::size_t skip_space(std::size_t i) const {
+    for (;; ++i) {
+      const auto u = static_cast<unsigned char>(at(i));
+      if (u == 0 || (u >= 0x80 && u < 0xC0) || !std::isspace(u)) return i;
+    }
+  }
+
+  std::size_t past(std::size_t from, std::string_view mark) const {
+    const std::size_t found = s_.find(mark, from);
+    return found == std::string_view::npos ? kStop : found + mark.size();
+  }
+
+  // XMLElement::ParseDeep and ParseAttributes: "<name attributes>", "</name attributes>" or
+  // "<name attributes/>"; each attribute is looked up among the earlier ones
+  std::size_t tag(const std::size_t start) {
+    std::size_t i = skip_space(start + 1);
+    if (at(i) == '/') ++i;
+    if (!is_name_start(at(i))) return kStop;
+    while (is_name_char(at(i))) ++i;
+    for (int count = 1;; ++count) {
+      i = skip_space(i);
+      if (at(i) == '>') return i + 1;
+      if (at(i) == '/' && at(i + 1) == '>') return i + 2;
+      if (!is_name_start(at(i))) return kStop;
+      while (is_name_char(at(i))) ++i;
+      i = skip_space(i);
+      if (at(i) != '=') return kStop;
+      i = skip_space(i + 1);
+      const char quote = at(i);
+      if (quote != '"' && quote != '\'') return kStop;
+      i = past(i + 1, std::string_view(&quote, 1));
+      if (i == kStop) return kStop;
+      max_ = std::max(max_, count);
+      if (count > limit_) {
+        too_many_at_ = start;
+        return kStop;
+      }
+    }
+  }
+
+  std::string_view s_;
+  int limit_;
+  int max_ = 0;
+  std::size_t too_many_at_ = kStop;
+};
+
+// TinyXML 1: byte by byte until the first declaration, and then UTF-8 or not as the declaration
+// says; UTF-8 from the start after a byte-order mark
+XmlPrescan scan_tinyxml1(std::string_view text, const XmlLimits& limits) {
+  const bool bom = text.substr(0, 3) == "\xEF\xBB\xBF";
+  TinyXml1Scan bytes(text, bom, limits);
+  bytes.run(0);
+  XmlPrescan out = bytes.result();
+  if (bom || out.excess != XmlPrescan::Excess::kNone || bytes.first_declaration_end() == kStop) {
+    return out;
+  }
+  TinyXml1Scan utf8(text, true, limits);
+  utf8.run(bytes.first_declaration_end());
+  const XmlPrescan after = utf8.result();
+  if (after.excess != XmlPrescan::Excess::kNone) return after;
+  out.depth = std::max(out.depth, after.depth);
+  out.attributes = std::max(out.attributes, after.attributes);
   return out;
 }
 
 }  // namespace
 
-XmlNesting tinyxml_nesting(std::string_view text, int limit) {
+XmlPrescan prescan_xml(std::string_view text, const XmlLimits& limits) {
   text = text.substr(0, text.find('\0'));
-  // TinyXML 1 reads UTF-8 from the start after a byte-order mark; otherwise byte by byte until
-  // the first declaration, and then UTF-8 or not as the declaration says
-  const bool bom = text.substr(0, 3) == "\xEF\xBB\xBF";
-  Scanner bytes(text, bom, limit);
-  bytes.run(0);
-  XmlNesting out = result_of(text, bytes);
-  if (bom || out.line != 0 || bytes.first_declaration_end() == kStop) return out;
-  Scanner utf8(text, true, limit);
-  utf8.run(bytes.first_declaration_end());
-  const XmlNesting after = result_of(text, utf8);
-  if (after.line != 0) return after;
-  out.depth = std::max(out.depth, after.depth);
+  XmlPrescan out = scan_tinyxml1(text, limits);
+  if (out.excess != XmlPrescan::Excess::kNone) return out;
+  TinyXml2Scan two(text, limits.attributes);
+  two.run();
+  out.attributes = std::max(out.attributes, two.max_attributes());
+  if (two.too_many_at() != kStop) {
+    out.excess = XmlPrescan::Excess::kAttributes;
+    out.line = line_at(text, two.too_many_at());
+  }
   return out;
 }
 
