@@ -1,6 +1,7 @@
 // Tests for io/urdf.hpp and io/model_file.hpp: frame conversion, joint and root
 // handling, warnings for what is not imported, mesh resolution, every URDF of the shared data and
-// benchmark folders, Jacobians against finite differences, and a corpus of malformed files.
+// benchmark folders, Jacobians against finite differences, a corpus of malformed files, and the
+// XML limits (with io/xml_prescan.hpp, what the XML parsers would build).
 #include "io/urdf.hpp"
 
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 #include "core/configuration.hpp"
 #include "io/character_json.hpp"
 #include "io/model_file.hpp"
+#include "io/xml_prescan.hpp"
 #include "core/kinematics.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/fixtures/kinematics_checks.hpp"
@@ -924,6 +926,161 @@ TEST(UrdfMalformed, FinalizeErrorsCarryTheFileName) {
   EXPECT_NE(e.find("test.urdf: joint 'j': velocity and effort limits must be >= 0"),
             std::string::npos)
       << e;
+}
+
+TEST(UrdfMalformed, OversizedFileIsRefusedBeforeReading) {
+  TempDir tmp;
+  const fs::path path = tmp.path() / "huge.urdf";
+  write_file(path, "");
+  fs::resize_file(path, io::kMaxUrdfBytes + 1);  // sparse: nothing of it is read
+  EXPECT_EQ(error_of([&] { io::load_urdf_file(path.string()); }),
+            path.string() + ": file is " + std::to_string(io::kMaxUrdfBytes + 1) +
+                " bytes (rule: a URDF is at most " + std::to_string(io::kMaxUrdfBytes) + " bytes)");
+  EXPECT_EQ(error_of([&] { io::load_urdf_file(tmp.path().string()); }),
+            tmp.path().string() + ": is not a regular file");
+}
+
+TEST(UrdfMalformed, RepeatedJointNameIsRefusedWithTheLineOfEachDefinition) {
+  // urdfdom refuses a repeated joint name without saying where; every definition is named
+  const std::string twice = robot(R"(<link name="a"/><link name="b"/><link name="c"/>
+<joint name="knee" type="fixed"><parent link="a"/><child link="b"/></joint>
+<joint name="knee" type="fixed"><parent link="b"/><child link="c"/></joint>)");
+  EXPECT_EQ(error_of([&] { load(twice); }),
+            "test.urdf: joint 'knee' is defined twice (lines 4 and 5) (rule: joint names are "
+            "unique)");
+  // the same joint three times: one message, not "the child of 3 joints" as well
+  const std::string thrice = robot(R"(<link name="a"/><link name="b"/>
+<joint name="hip" type="fixed"><parent link="a"/><child link="b"/></joint>
+<joint name="hip" type="fixed"><parent link="a"/><child link="b"/></joint>
+<joint name="hip" type="fixed"><parent link="a"/><child link="b"/></joint>)");
+  EXPECT_EQ(error_of([&] { load(thrice); }),
+            "test.urdf: joint 'hip' is defined 3 times (lines 4, 5 and 6) (rule: joint names are "
+            "unique)");
+}
+
+TEST(UrdfMalformed, RepeatedLinkNameIsRefused) {
+  const std::string e = error_of([] {
+    load(robot(R"(<link name="base"/><link name="arm"/>
+<link name="arm"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1"/></inertial></link>
+<joint name="shoulder" type="fixed"><parent link="base"/><child link="arm"/></joint>)"));
+  });
+  EXPECT_NE(e.find("test.urdf: urdfdom: link 'arm' is not unique."), std::string::npos) << e;
+}
+
+// ------------------------------------------------------------------------------------------------
+// element nesting: refused before any XML parser recurses into it
+
+std::string nesting_error(int line) {
+  const std::string n = std::to_string(io::kMaxUrdfDepth);
+  return "line " + std::to_string(line) + ": elements are nested deeper than " + n +
+         " (rule: a URDF nests XML elements at most " + n + " deep)";
+}
+
+TEST(UrdfNesting, DeepFilesAreRefusedWithoutCrashing) {
+  // 40,000 levels overflowed the stack of urdfdom's recursive XML parser (TinyXML 1)
+  TempDir tmp;
+  for (int levels : {40000, 1000}) {
+    std::string text = "<robot>";
+    for (int i = 0; i < levels; ++i) text += "<a>";
+    const fs::path path = tmp.path() / ("deep" + std::to_string(levels) + ".urdf");
+    write_file(path, text);
+    EXPECT_EQ(error_of([&] { io::load_model_file(path.string()); }),
+              path.string() + ": " + nesting_error(1));
+  }
+}
+
+TEST(UrdfNesting, AFileAtTheLimitLoadsAndOneLevelDeeperIsRefused) {
+  // <robot> is level 1; ignored <gazebo> elements nest the other levels, one per line
+  auto nested = [](int depth) {
+    std::string open, close;
+    for (int level = 2; level <= depth; ++level) {
+      open += "<gazebo>\n";
+      close += "</gazebo>\n";
+    }
+    return "<robot name=\"deep\">\n<link name=\"base\"/>\n" + open + close + "</robot>\n";
+  };
+  const LoadResult r = load(nested(io::kMaxUrdfDepth));
+  EXPECT_EQ(r.model->nlinks(), 1);
+  EXPECT_EQ(count_containing(r.warnings, "<gazebo> elements are ignored (1 found"), 1);
+  // level L is on line L + 1
+  EXPECT_EQ(error_of([&] { load(nested(io::kMaxUrdfDepth + 1)); }),
+            "test.urdf: " + nesting_error(io::kMaxUrdfDepth + 2));
+}
+
+TEST(UrdfNesting, NestingThatOnlyUrdfdomsParserSeesIsRefused) {
+  // tinyxml2 reads both files as two levels deep; TinyXML 1 ends a processing instruction at its
+  // first '>', and after a declaration reads UTF-8, where a stray lead byte swallows the end tag
+  // after it. Both crashed the loader before the nesting rule.
+  std::string instruction = "<?pi ", lead_bytes;
+  for (int i = 0; i < 40000; ++i) {
+    instruction += "<a>";
+    lead_bytes += "<a>\xF0</a>";
+  }
+  instruction += "?>\n<robot name=\"r\"><link name=\"l\"/></robot>\n";
+  EXPECT_EQ(error_of([&] { load(instruction); }), "test.urdf: " + nesting_error(1));
+  lead_bytes =
+      "<?xml version=\"1.0\"?>\n<robot name=\"r\"><link name=\"l\"/>" + lead_bytes + "</robot>\n";
+  EXPECT_EQ(error_of([&] { load(lead_bytes); }), "test.urdf: " + nesting_error(2));
+}
+
+TEST(UrdfXmlLimits, ManyAttributesOnOneElementAreRefusedBeforeParsing) {
+  // both XML parsers compare each attribute with every earlier one of its element: 200,000 of
+  // them took minutes
+  auto link = [](int attributes) {
+    std::string text = "<robot name=\"r\">\n<link name=\"base\"";
+    for (int i = 1; i < attributes; ++i) text += " a" + std::to_string(i) + "=\"1\"";
+    return text + "/>\n</robot>\n";
+  };
+  EXPECT_EQ(load(link(io::kMaxUrdfAttributes)).model->nlinks(), 1);
+  const std::string n = std::to_string(io::kMaxUrdfAttributes);
+  const std::string refused = "test.urdf: line 2: an element has more than " + n +
+                              " attributes (rule: an XML element of a URDF has at most " + n +
+                              " attributes)";
+  EXPECT_EQ(error_of([&] { load(link(io::kMaxUrdfAttributes + 1)); }), refused);
+  EXPECT_EQ(error_of([&] { load(link(200000)); }), refused);
+}
+
+// prescan_xml with room for anything but what a test is about
+io::XmlPrescan prescan(std::string_view text, int depth = 64, int attributes = 64) {
+  return io::prescan_xml(text, {depth, attributes});
+}
+
+TEST(XmlPrescan, CountsElementsAsTinyXml1ReadsThem) {
+  EXPECT_EQ(prescan("<a><b/><c><d/></c></a>").depth, 3);
+  EXPECT_EQ(prescan("").depth, 0);
+  // markup in values, comments and CDATA is not an element
+  EXPECT_EQ(prescan("<a x=\"<b><b>\"><!-- <c><c> --><![CDATA[<d><d>]]></a>").depth, 1);
+  // TinyXML 1's own reading: an instruction ends at its first '>'; "&#x...;" skips to its ';'
+  EXPECT_EQ(prescan("<?pi <x><b><c>?>").depth, 2);
+  EXPECT_EQ(prescan("<a>&#x</a>x1;<b/></a>").depth, 2);
+  // a lead byte hides the end tag in UTF-8 mode: after a declaration or a byte-order mark only
+  EXPECT_EQ(prescan("<a>\xF0</a><b/>").depth, 1);
+  EXPECT_EQ(prescan("<?xml version=\"1.0\"?><a>\xF0</a><b/>").depth, 2);
+  EXPECT_EQ(prescan("\xEF\xBB\xBF<a>\xF0</a><b/>").depth, 2);
+  // both parsers read a C string: nothing after the first NUL
+  EXPECT_EQ(prescan(std::string_view("<a>\0<b><c>", 10)).depth, 1);
+}
+
+TEST(XmlPrescan, CountsAttributesAsEitherParserReadsThem) {
+  EXPECT_EQ(prescan("<a x=\"1\" y='2'><b z=\"3\"/></a>").attributes, 2);
+  // TinyXML 1 takes unquoted values; tinyxml2 reads attributes in an end tag
+  EXPECT_EQ(prescan("<a x=1 y=2 z=3/>").attributes, 3);
+  EXPECT_EQ(prescan("<a></a x=\"1\" y=\"2\">").attributes, 2);
+  // TinyXML 1 stops at "&#xg;", but tinyxml2 goes on to the element after it
+  EXPECT_EQ(prescan("<a x=\"&#xg;\"/><b x=\"1\" y=\"2\" z=\"3\"/>").attributes, 3);
+}
+
+TEST(XmlPrescan, StopsAtTheFirstElementBeyondALimitAndNamesItsLine) {
+  const io::XmlPrescan deep = prescan("<a>\n<b>\n<c>\n<d>", 2);
+  EXPECT_EQ(deep.excess, io::XmlPrescan::Excess::kDepth);
+  EXPECT_EQ(deep.depth, 3);
+  EXPECT_EQ(deep.line, 3);
+  EXPECT_EQ(prescan("<a>\n<b>\n<c>\n<d>", 4).excess, io::XmlPrescan::Excess::kNone);
+  EXPECT_EQ(prescan("<a>\n<b>\n<c>\n<d>", 4).line, 0);
+  const io::XmlPrescan wide = prescan("<a>\n<b x='1' y='2' z='3'/></a>", 64, 2);
+  EXPECT_EQ(wide.excess, io::XmlPrescan::Excess::kAttributes);
+  EXPECT_EQ(wide.attributes, 3);
+  EXPECT_EQ(wide.line, 2);
 }
 
 // ------------------------------------------------------------------------------------------------
