@@ -749,6 +749,24 @@ BvhRotationOrder order_of(const std::vector<BvhChannel>& channels) {
   return order;
 }
 
+// The rotation of the shortest arc from +Z to the direction of d (d != 0, finite): the unit
+// quaternion proportional to (1 + u_z, z × u) with u = d / |d|. Near -Z, 1 + u_z is taken as
+// (u_x² + u_y²) / (1 - u_z), free of cancellation; Eigen's FromTwoVectors loses it there and
+// returns quaternions up to 1e-6 off unit length, whose matrices the model builder refuses as not
+// orthonormal. Both vectors are scaled by their largest component first, so neither a 1e9 nor a
+// denormal component under- or overflows. Exactly -Z: a half turn about X.
+Matrix3 rotation_from_z(const Vector3& d) {
+  const Vector3 a = d / d.cwiseAbs().maxCoeff();
+  const Vector3 u = a / a.norm();  // |a| in [1, √3]
+  const double w = u.z() >= 0 ? 1 + u.z() : (u.x() * u.x() + u.y() * u.y()) / (1 - u.z());
+  Quaternion q(w, -u.y(), u.x(), 0);
+  const double largest = q.coeffs().cwiseAbs().maxCoeff();
+  if (!(largest > 0)) return Quaternion(0, 1, 0, 0).toRotationMatrix();
+  q.coeffs() /= largest;
+  q.normalize();
+  return q.toRotationMatrix();
+}
+
 }  // namespace
 
 // -----------------------------------------------------------------------------------------------
@@ -925,8 +943,10 @@ BvhImport import_bvh(const BvhDocument& doc, const std::string& source_name,
   }
   const BvhExtent extent = bvh_rest_extent(doc);
   out.height = extent.height * s;
-  // size of the figure for capsule radii; 1 m when the skeleton has no extent
-  const double h = extent.largest * s > 0 ? extent.largest * s : 1.0;
+  // size of the figure for capsule radii; 1 m when the skeleton has no extent (under 1 µm, where
+  // radii squared would underflow into links of mass without inertia)
+  constexpr double kNoExtent = 1e-6;  // metres
+  const double h = extent.largest * s > kNoExtent ? extent.largest * s : 1.0;
 
   // link names: the joint names, End Sites "<joint>_end" made unique
   const int n = static_cast<int>(doc.nodes.size());
@@ -1007,8 +1027,7 @@ BvhImport import_bvh(const BvhDocument& doc, const std::string& source_name,
           g.shape = Geometry::Shape::kCapsule;
           g.radius = r;
           g.length = L;
-          g.X_LinkShape = {Quaternion::FromTwoVectors(Vector3::UnitZ(), u).toRotationMatrix(),
-                           0.5 * d};
+          g.X_LinkShape = {rotation_from_z(d), 0.5 * d};
           l.collision.push_back(g);
         }
         Vector3 com = Vector3::Zero();
