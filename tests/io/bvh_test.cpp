@@ -504,12 +504,13 @@ TEST(BvhReader, FileLevelLimitsAndMissingFiles) {
   TempDir dir;
   expect_error([&] { io::load_bvh_file(dir.file("absent.bvh")); },
                {"absent.bvh: cannot open the file"});
-  expect_error([&] { io::load_bvh_file(dir.path.string()); }, {"not a regular file"});
+  expect_error([&] { io::load_bvh_file(dir.path.string()); }, {"is a directory"});
   // a sparse file larger than kMaxBvhBytes is refused from its size, without reading it
   const std::string big = dir.file("big.bvh");
   { std::ofstream(big) << "HIERARCHY"; }
   fs::resize_file(big, io::kMaxBvhBytes + 1);
-  expect_error([&] { io::load_bvh_file(big); }, {"big.bvh: the file is", "kMaxBvhBytes"});
+  expect_error([&] { io::load_bvh_file(big); },
+               {"big.bvh: file is 268435457 bytes", "a BVH file is at most 268435456 bytes"});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -612,10 +613,15 @@ TEST(BvhImport, AutomaticScalePerSharedFile) {
   }
 }
 
-// Every collision shape has an orthonormal pose; a capsule lies along its bone: its axis (+Z of
-// the shape frame) points from the joint to the shape's centre, and it is twice that long.
+// Every link with mass has rotational inertia and a collision shape; every shape has an
+// orthonormal pose; a capsule lies along its bone: its axis (+Z of the shape frame) points from
+// the joint to the shape's centre, and it is twice that long.
 void expect_capsules_along_their_bones(const core::Model& m) {
   for (int i = 1; i < m.njoints; ++i) {
+    if (m.inertia[i].mass > 0) {
+      EXPECT_GT(m.inertia[i].inertia_about_com().trace(), 0) << m.link_name[i];
+      EXPECT_FALSE(m.collision[i].empty()) << m.link_name[i];
+    }
     for (const core::Geometry& g : m.collision[i]) {
       const Matrix3& R = g.X_LinkShape.R;
       EXPECT_LT((R.transpose() * R - Matrix3::Identity()).norm(), 1e-12) << m.link_name[i];
@@ -679,6 +685,16 @@ TEST(BvhImport, ExtremeOffsetsGiveValidShapes) {
   const auto& bone = down.model->collision[down.model->link_index("Bone")];
   ASSERT_EQ(bone.size(), 1u);
   EXPECT_LT((bone[0].X_LinkShape.R.col(2) - Vector3(0, -1, 0)).norm(), 1e-15);
+  // two bones too short for a capsule (4e-8 units, under 1e-9 of the 55-unit figure) but longer
+  // together: a sphere, not a link of mass without inertia
+  std::string stubs = one_bone("0 4e-8 0");
+  const std::string end = "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 4e-8 0\n\t\t}\n";
+  stubs.insert(stubs.find(end) + end.size(), end);
+  const BvhImport s = io::load_bvh_string(stubs, "stubs.bvh");
+  expect_capsules_along_their_bones(*s.model);
+  const auto& stub = s.model->collision[s.model->link_index("Bone")];
+  ASSERT_EQ(stub.size(), 1u);
+  EXPECT_EQ(stub[0].shape, core::Geometry::Shape::kSphere);
   // a whole skeleton 1e-300 units tall
   std::string tiny = one_bone("0 1e-300 0");
   for (const char* o : {"0 10 0", "9 -5 0", "0 -40 0"}) {
