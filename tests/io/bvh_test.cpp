@@ -98,7 +98,8 @@ bool on_path(const std::string& tool) {
 }
 
 // Expects f to throw a ModelError holding every fragment; returns the message.
-std::string expect_error(const std::function<void()>& f, const std::vector<std::string>& fragments) {
+std::string expect_error(const std::function<void()>& f,
+                         const std::vector<std::string>& fragments) {
   try {
     f();
   } catch (const ModelError& e) {
@@ -146,8 +147,11 @@ Errors compare_nodes(const BvhImport& a, const BvhImport& b) {
 }
 
 // Compares the links that both models have, by name: world positions and rotations.
-Errors compare_links_by_name(const core::Model& ma, const core::Clip& ca, const core::Model& mb,
-                             const core::Clip& cb, int* compared = nullptr) {
+Errors compare_links_by_name(const core::Model& ma,
+                             const core::Clip& ca,
+                             const core::Model& mb,
+                             const core::Clip& cb,
+                             int* compared = nullptr) {
   Errors e;
   EXPECT_EQ(ca.size(), cb.size());
   const auto pa = posed(ma, ca);
@@ -287,9 +291,9 @@ TEST(BvhReader, IsLiberalAboutLayoutCaseAndLineEndings) {
             (std::vector<BvhChannel>{BvhChannel::kXposition, BvhChannel::kYposition,
                                      BvhChannel::kZposition, BvhChannel::kZrotation,
                                      BvhChannel::kXrotation, BvhChannel::kYrotation}));
-  EXPECT_EQ(d.nodes[1].channels, (std::vector<BvhChannel>{BvhChannel::kYrotation,
-                                                          BvhChannel::kZrotation,
-                                                          BvhChannel::kXrotation}));
+  EXPECT_EQ(d.nodes[1].channels,
+            (std::vector<BvhChannel>{BvhChannel::kYrotation, BvhChannel::kZrotation,
+                                     BvhChannel::kXrotation}));
   EXPECT_EQ(d.nodes[1].first_value, 6);
   EXPECT_EQ(d.channels, 9);
   EXPECT_EQ(d.frames, 2);
@@ -323,9 +327,11 @@ TEST(BvhReader, NumbersParseExactly) {
     expected.push_back(w);
     line += std::string(buf) + " ";
   }
-  std::string text = "HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n";
+  std::string text =
+      "HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n";
   for (int j = 1; j < 100; ++j) {
-    text += "JOINT j" + std::to_string(j) + "\n{\nOFFSET 0 1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n";
+    text += "JOINT j" + std::to_string(j) +
+            "\n{\nOFFSET 0 1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n";
   }
   for (int j = 0; j < 100; ++j) text += "}\n";
   text += "MOTION\nFrames: 1\nFrame Time: 0.1\n" + line + "\n";
@@ -422,7 +428,8 @@ TEST(BvhReader, MalformedCorpusFailsWithFileLineAndRule) {
       {"nan_offset.bvh", 8, "'nan' is not finite"},
       {"unnamed_joint.bvh", 6, "JOINT without a name"},
       {"unclosed_root.bvh", 15, "MOTION inside ROOT 'Hips' (line 2)"},
-      {"binary_garbage.bvh", 1, "is a control character (rule: a BVH hierarchy is text; binary data?)"},
+      {"binary_garbage.bvh", 1,
+       "is a control character (rule: a BVH hierarchy is text; binary data?)"},
       {"binary_in_hierarchy.bvh", 6, "'\\x00' is a control character"},
       {"binary_in_motion.bvh", 20, "'\\x00\\xff\\xfe\\x01' is not a number"},
   };
@@ -470,8 +477,9 @@ TEST(BvhReader, TenMegabyteLinesAreRefusedWithoutCopying) {
   {
     const std::string text = "HIERARCHY\nROOT " + big + "\n{\n";
     fixtures::AllocationCounter allocations;
-    expect_error([&] { io::parse_bvh(text, "long.bvh"); },
-                 {"long.bvh: line 2: the line is longer than 1048576 bytes (rule: kMaxBvhLineBytes)"});
+    expect_error(
+        [&] { io::parse_bvh(text, "long.bvh"); },
+        {"long.bvh: line 2: the line is longer than 1048576 bytes (rule: kMaxBvhLineBytes)"});
     EXPECT_LT(allocations.bytes(), 64 * 1024);
   }
   {
@@ -496,12 +504,13 @@ TEST(BvhReader, FileLevelLimitsAndMissingFiles) {
   TempDir dir;
   expect_error([&] { io::load_bvh_file(dir.file("absent.bvh")); },
                {"absent.bvh: cannot open the file"});
-  expect_error([&] { io::load_bvh_file(dir.path.string()); }, {"not a regular file"});
+  expect_error([&] { io::load_bvh_file(dir.path.string()); }, {"is a directory"});
   // a sparse file larger than kMaxBvhBytes is refused from its size, without reading it
   const std::string big = dir.file("big.bvh");
   { std::ofstream(big) << "HIERARCHY"; }
   fs::resize_file(big, io::kMaxBvhBytes + 1);
-  expect_error([&] { io::load_bvh_file(big); }, {"big.bvh: the file is", "kMaxBvhBytes"});
+  expect_error([&] { io::load_bvh_file(big); },
+               {"big.bvh: file is 268435457 bytes", "a BVH file is at most 268435456 bytes"});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -535,7 +544,8 @@ TEST(BvhImport, BuildsTheSkeletonAsAModel) {
   EXPECT_LT(imp.height, 2.0);
   EXPECT_NEAR(m.total_mass(), 70.0, 1e-9);
   // masses follow the bone lengths: a thigh outweighs a finger, End Sites weigh nothing
-  EXPECT_GT(m.inertia[m.link_index("LeftUpLeg")].mass, m.inertia[m.link_index("LeftFingerBase")].mass);
+  EXPECT_GT(m.inertia[m.link_index("LeftUpLeg")].mass,
+            m.inertia[m.link_index("LeftFingerBase")].mass);
   EXPECT_EQ(m.inertia[head_end].mass, 0.0);
   // capsules for the collision shapes
   EXPECT_EQ(m.collision[m.link_index("LeftUpLeg")].size(), 1u);
@@ -584,11 +594,14 @@ TEST(BvhImport, ModelPosesEqualTheFilesOwnForwardKinematics) {
 
 TEST(BvhImport, AutomaticScalePerSharedFile) {
   PINDRAG_REQUIRE_DATA_DIR();
-  const std::map<std::string, double> expected = {
-      {"boxing_toes_zxy.bvh", 0.01},           {"cmu_01_01_jumps.bvh", 2.54 / 45},
-      {"cmu_131_01_mj_walk_3dsmax.bvh", 2.54 / 45}, {"cmu_walk_cgspeed.bvh", 2.54 / 45},
-      {"fairmotion_sinusoidal_xyz.bvh", 2.54 / 45}, {"mixamo_naming_freebvh.bvh", 0.01},
-      {"optitrack_arena_louise.bvh", 0.01},    {"pfnn_hierarchy_metres.bvh", 1.0}};
+  const std::map<std::string, double> expected = {{"boxing_toes_zxy.bvh", 0.01},
+                                                  {"cmu_01_01_jumps.bvh", 2.54 / 45},
+                                                  {"cmu_131_01_mj_walk_3dsmax.bvh", 2.54 / 45},
+                                                  {"cmu_walk_cgspeed.bvh", 2.54 / 45},
+                                                  {"fairmotion_sinusoidal_xyz.bvh", 2.54 / 45},
+                                                  {"mixamo_naming_freebvh.bvh", 0.01},
+                                                  {"optitrack_arena_louise.bvh", 0.01},
+                                                  {"pfnn_hierarchy_metres.bvh", 1.0}};
   for (const std::string& path : shared_files()) {
     const std::string name = fs::path(path).filename().string();
     const BvhDocument doc = io::parse_bvh(read_file(path), path);
@@ -597,6 +610,126 @@ TEST(BvhImport, AutomaticScalePerSharedFile) {
     EXPECT_DOUBLE_EQ(u.scale, expected.at(name)) << name << ": " << u.unit;
     const double height = io::bvh_rest_extent(doc).height * u.scale;
     std::printf("  %-32s unit %-24s rest height %.3f m\n", name.c_str(), u.unit.c_str(), height);
+  }
+}
+
+// Every link with mass has rotational inertia and a collision shape; every shape has an
+// orthonormal pose; a capsule lies along its bone: its axis (+Z of the shape frame) points from
+// the joint to the shape's centre, and it is twice that long.
+void expect_capsules_along_their_bones(const core::Model& m) {
+  for (int i = 1; i < m.njoints; ++i) {
+    if (m.inertia[i].mass > 0) {
+      EXPECT_GT(m.inertia[i].inertia_about_com().trace(), 0) << m.link_name[i];
+      EXPECT_FALSE(m.collision[i].empty()) << m.link_name[i];
+    }
+    for (const core::Geometry& g : m.collision[i]) {
+      const Matrix3& R = g.X_LinkShape.R;
+      EXPECT_LT((R.transpose() * R - Matrix3::Identity()).norm(), 1e-12) << m.link_name[i];
+      EXPECT_GT(R.determinant(), 0) << m.link_name[i];
+      EXPECT_GT(g.radius, 0) << m.link_name[i];
+      if (g.shape != core::Geometry::Shape::kCapsule) continue;
+      const Vector3& p = g.X_LinkShape.p;
+      const Vector3 u = (p / p.cwiseAbs().maxCoeff()).normalized();
+      EXPECT_LT((R.col(2) - u).norm(), 1e-9) << m.link_name[i];
+      EXPECT_NEAR(g.length, 2 * p.stableNorm(), 1e-12 * g.length) << m.link_name[i];
+    }
+  }
+}
+
+// A hips joint with one bone to an End Site at `offset`, next to an ordinary leg.
+std::string one_bone(const std::string& offset) {
+  return "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n"
+         "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+         "\tJOINT Bone\n\t{\n\t\tOFFSET 0 10 0\n\t\tCHANNELS 3 Zrotation Xrotation Yrotation\n"
+         "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET " +
+         offset +
+         "\n\t\t}\n\t}\n"
+         "\tJOINT Leg\n\t{\n\t\tOFFSET 9 -5 0\n\t\tCHANNELS 3 Zrotation Xrotation Yrotation\n"
+         "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 -40 0\n\t\t}\n\t}\n}\n"
+         "MOTION\nFrames: 1\nFrame Time: 0.04\n0 90 0 0 0 0 10 20 30 -10 5 0\n";
+}
+
+// The fuzzer's find: an OFFSET of -1e6 next to offsets of ~10 put a capsule within 1e-5 rad of
+// -Z, where Eigen's FromTwoVectors returns a quaternion 1e-6 off unit length, and the model
+// builder refused the capsule's rotation as not orthonormal.
+TEST(BvhImport, AnOffsetFarBeyondItsSiblingsImports) {
+  const std::string path =
+      fixtures::source_dir() + "/tests/fixtures/bvh/offset_far_beyond_its_siblings.bvh";
+  const BvhImport imp = io::load_bvh_file(path);
+  const core::Model& m = *imp.model;
+  expect_capsules_along_their_bones(m);
+  EXPECT_NEAR(m.total_mass(), 70.0, 1e-9);
+  EXPECT_EQ(core::check_clip(m, imp.clip), "");
+  // Hips' bone to Spine points (almost exactly) along -Z
+  const int hips = m.link_index("Hips");
+  ASSERT_GE(hips, 1);
+  const auto& shapes = m.collision[hips];
+  ASSERT_EQ(shapes.size(), 2u);
+  EXPECT_LT((shapes[0].X_LinkShape.R.col(2) - Vector3(0, 1e-5, -1)).norm(), 1e-9);
+}
+
+// Any document the reader accepts imports: offsets up to kMaxBvhMagnitude, bones antiparallel to
+// the capsule axis, exactly along -Y, shorter than a denormal, and a skeleton of 1e-300 units.
+TEST(BvhImport, ExtremeOffsetsGiveValidShapes) {
+  for (const std::string offset :
+       {"0 0 1000000000", "0 0 -1000000000", "-1e9 1e9 -1e9", "0 -7 0", "0 0 -7", "0 0.01 -1000",
+        "1e-300 0 -7", "0 1e-300 0", "4.9e-324 0 0", "0 0 0"}) {
+    SCOPED_TRACE(offset);
+    const BvhImport imp = io::load_bvh_string(one_bone(offset), "extreme.bvh");
+    expect_capsules_along_their_bones(*imp.model);
+    EXPECT_NEAR(imp.model->total_mass(), 70.0, 1e-9);
+    EXPECT_EQ(core::check_clip(*imp.model, imp.clip), "");
+  }
+  // a bone exactly along -Y turns the capsule's +Z onto -Y
+  const BvhImport down = io::load_bvh_string(one_bone("0 -7 0"), "down.bvh");
+  const auto& bone = down.model->collision[down.model->link_index("Bone")];
+  ASSERT_EQ(bone.size(), 1u);
+  EXPECT_LT((bone[0].X_LinkShape.R.col(2) - Vector3(0, -1, 0)).norm(), 1e-15);
+  // two bones too short for a capsule (4e-8 units, under 1e-9 of the 55-unit figure) but longer
+  // together: a sphere, not a link of mass without inertia
+  std::string stubs = one_bone("0 4e-8 0");
+  const std::string end = "\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 4e-8 0\n\t\t}\n";
+  stubs.insert(stubs.find(end) + end.size(), end);
+  const BvhImport s = io::load_bvh_string(stubs, "stubs.bvh");
+  expect_capsules_along_their_bones(*s.model);
+  const auto& stub = s.model->collision[s.model->link_index("Bone")];
+  ASSERT_EQ(stub.size(), 1u);
+  EXPECT_EQ(stub[0].shape, core::Geometry::Shape::kSphere);
+  // a whole skeleton 1e-300 units tall
+  std::string tiny = one_bone("0 1e-300 0");
+  for (const char* o : {"0 10 0", "9 -5 0", "0 -40 0"}) {
+    tiny.replace(tiny.find(o), std::string(o).size(), "0 -1e-300 0");
+  }
+  const BvhImport t = io::load_bvh_string(tiny, "tiny.bvh");
+  expect_capsules_along_their_bones(*t.model);
+  EXPECT_NEAR(t.model->total_mass(), 70.0, 1e-9);
+  // it counts as a skeleton without extent: 1 m for the radii, so no link has mass without
+  // rotational inertia (1e-300² underflows)
+  for (int i = 1; i < t.model->njoints; ++i) {
+    if (t.model->inertia[i].mass == 0) continue;
+    EXPECT_GT(t.model->inertia[i].inertia_about_com().trace(), 1e-6) << t.model->link_name[i];
+  }
+}
+
+// Ordinary files keep the capsule of the shortest arc from +Z to the bone (what
+// Quaternion::FromTwoVectors gives away from -Z).
+TEST(BvhImport, CapsulesTakeTheShortestArcFromZ) {
+  for (const char* name : {"mixed_orders.bvh", "liberal_crlf.bvh"}) {
+    const std::string path = fixtures::source_dir() + "/tests/fixtures/bvh/" + name;
+    const BvhImport imp = io::load_bvh_file(path);
+    expect_capsules_along_their_bones(*imp.model);
+    int capsules = 0;
+    for (const auto& shapes : imp.model->collision) {
+      for (const core::Geometry& g : shapes) {
+        if (g.shape != core::Geometry::Shape::kCapsule) continue;
+        const Vector3 u = g.X_LinkShape.p.normalized();
+        if (u.z() < -0.999) continue;
+        const Matrix3 R = Quaternion::FromTwoVectors(Vector3::UnitZ(), u).toRotationMatrix();
+        EXPECT_LT((g.X_LinkShape.R - R).norm(), 1e-12) << name;
+        ++capsules;
+      }
+    }
+    EXPECT_GE(capsules, 2) << name;
   }
 }
 
@@ -627,7 +760,8 @@ TEST(BvhWriter, WritesTheConservativeForm) {
   EXPECT_NE(text.find("\nFrame Time: 0.008333333333333333\n"), std::string::npos);
   // every non-root joint 3 channels; every number in fixed notation with 6 decimals
   const std::regex channels3("^\\t+CHANNELS 3 Zrotation Xrotation Yrotation$");
-  const std::regex offset("^\\t+OFFSET -?[0-9]+\\.[0-9]{6} -?[0-9]+\\.[0-9]{6} -?[0-9]+\\.[0-9]{6}$");
+  const std::regex offset(
+      "^\\t+OFFSET -?[0-9]+\\.[0-9]{6} -?[0-9]+\\.[0-9]{6} -?[0-9]+\\.[0-9]{6}$");
   const std::regex values("^(-?[0-9]+\\.[0-9]{6})( -?[0-9]+\\.[0-9]{6})*$");
   int joints = 0, end_sites = 0, motion_lines = 0;
   bool motion = false;
@@ -709,7 +843,8 @@ struct RoundTrip {
   BvhDocument doc_a, doc_b;
   std::string text;
 };
-RoundTrip round_trip(const std::string& text, const std::string& name,
+RoundTrip round_trip(const std::string& text,
+                     const std::string& name,
                      const BvhImportOptions& options = {}) {
   RoundTrip r;
   r.doc_a = io::parse_bvh(text, name);
@@ -756,10 +891,11 @@ TEST(BvhRoundTrip, EverySharedFile) {
     const Errors e = compare_nodes(r.a, r.b);
     EXPECT_LT(e.position, 1e-4 * r.a.height);
     EXPECT_LT(e.rotation, 1e-4);
-    std::printf("  %-32s %4d frames  height %.3f m  max position error %.3g m (%.3g of the height)"
-                "  max rotation error %.3g rad\n",
-                fs::path(path).filename().c_str(), r.a.clip.size(), r.a.height, e.position,
-                e.position / r.a.height, e.rotation);
+    std::printf(
+        "  %-32s %4d frames  height %.3f m  max position error %.3g m (%.3g of the height)"
+        "  max rotation error %.3g rad\n",
+        fs::path(path).filename().c_str(), r.a.clip.size(), r.a.height, e.position,
+        e.position / r.a.height, e.rotation);
     // re-ordered to ZXY and written in metres: every angle is a new decomposition
     BvhExportOptions zxy;
     zxy.layout = &r.a.layout;
@@ -768,13 +904,14 @@ TEST(BvhRoundTrip, EverySharedFile) {
     BvhImportOptions metres;
     metres.scale = 1.0;
     const BvhImport c = io::load_bvh_string(io::write_bvh(*r.a.model, r.a.clip, zxy),
-                                                  path + " (ZXY, metres)", metres);
+                                            path + " (ZXY, metres)", metres);
     const Errors ec = compare_nodes(r.a, c);
     EXPECT_LT(ec.position, 1e-4 * r.a.height);
     EXPECT_LT(ec.rotation, 1e-4);
-    std::printf("  %-32s as ZXY in metres: max position error %.3g m (%.3g of the height)"
-                "  max rotation error %.3g rad\n",
-                "", ec.position, ec.position / r.a.height, ec.rotation);
+    std::printf(
+        "  %-32s as ZXY in metres: max position error %.3g m (%.3g of the height)"
+        "  max rotation error %.3g rad\n",
+        "", ec.position, ec.position / r.a.height, ec.rotation);
   }
 }
 
@@ -842,8 +979,10 @@ std::string synthetic_bvh(int frames, bool smooth) {
     order.push_back(i);
     const J& j = js[i];
     char buf[128];
-    std::snprintf(buf, sizeof buf, "OFFSET %.4f %.4f %.4f", j.offset.x(), j.offset.y(), j.offset.z());
-    out += ind + (i == 0 ? "ROOT " : "JOINT ") + j.name + "\n" + ind + "{\n" + ind + "\t" + buf + "\n";
+    std::snprintf(buf, sizeof buf, "OFFSET %.4f %.4f %.4f", j.offset.x(), j.offset.y(),
+                  j.offset.z());
+    out +=
+        ind + (i == 0 ? "ROOT " : "JOINT ") + j.name + "\n" + ind + "{\n" + ind + "\t" + buf + "\n";
     const int n = static_cast<int>(std::count(j.channels.begin(), j.channels.end(), ' ')) + 1;
     out += ind + "\tCHANNELS " + std::to_string(n) + " " + j.channels + "\n";
     for (int k : kids[i]) emit(k, depth + 1);
@@ -900,9 +1039,10 @@ TEST(BvhRoundTrip, SyntheticMixedOrdersNearGimbalAndWraps) {
   const Errors e = compare_nodes(r.a, r.b);
   EXPECT_LT(e.position, 1e-4 * r.a.height);
   EXPECT_LT(e.rotation, 1e-4);
-  std::printf("  synthetic (layout orders): max position error %.3g m (%.3g of the height), "
-              "max rotation error %.3g rad\n",
-              e.position, e.position / r.a.height, e.rotation);
+  std::printf(
+      "  synthetic (layout orders): max position error %.3g m (%.3g of the height), "
+      "max rotation error %.3g rad\n",
+      e.position, e.position / r.a.height, e.rotation);
   // re-ordered: every joint ZXY, XYZ or YXZ, and in metres: the same poses
   for (const char* order : {"ZXY", "XYZ", "YXZ"}) {
     BvhExportOptions x;
@@ -921,8 +1061,7 @@ TEST(BvhRoundTrip, SyntheticMixedOrdersNearGimbalAndWraps) {
     for (size_t k = 1; k < d.nodes.size(); ++k) {
       if (d.nodes[k].is_end_site()) continue;
       EXPECT_EQ(d.nodes[k].channels.size(), d.nodes[k].name == "Prop" ? 6u : 3u);
-      EXPECT_EQ(io::to_string(d.nodes[k].channels.back()),
-                std::string(1, order[2]) + "rotation");
+      EXPECT_EQ(io::to_string(d.nodes[k].channels.back()), std::string(1, order[2]) + "rotation");
     }
   }
 }
@@ -1003,10 +1142,13 @@ std::string web_modules() { return fixtures::source_dir() + "/web/node_modules";
 
 // three.js's BVHLoader (Node) reads the exported file: same bones, same world positions as our
 // reader gives for that file, every frame
-void check_with_threejs(const std::string& bvh_path, const BvhImport& ours, const BvhDocument& doc,
+void check_with_threejs(const std::string& bvh_path,
+                        const BvhImport& ours,
+                        const BvhDocument& doc,
                         double tolerance) {
   const std::string script = fixtures::source_dir() + "/tests/io/bvh_threejs_positions.mjs";
-  const auto [status, out] = run("node '" + script + "' '" + web_modules() + "' '" + bvh_path + "'");
+  const auto [status, out] =
+      run("node '" + script + "' '" + web_modules() + "' '" + bvh_path + "'");
   ASSERT_EQ(status, 0) << out.substr(0, 400);
   const nlohmann::json j = nlohmann::json::parse(out);
   ASSERT_EQ(j["names"].size(), doc.nodes.size());
@@ -1098,7 +1240,8 @@ std::vector<Export> exports_to_check(const TempDir& dir) {
   h34.dof = 34;
   const auto human34 = core::build_human_figure(h34);
   core::Clip clip34;
-  for (int k = 0; k < 10; ++k) clip34.frames.push_back(core::random_configuration(*human34, 400 + k));
+  for (int k = 0; k < 10; ++k)
+    clip34.frames.push_back(core::random_configuration(*human34, 400 + k));
   add("exported_human34.bvh", io::write_bvh(*human34, clip34), 1.0);
   const auto tree = fixtures::branching_tree();
   core::Clip tclip;
