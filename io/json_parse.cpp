@@ -318,4 +318,10 @@ std::string json_number(double x) {
   return Json(x).dump();
 }
 
+std::string message_number(double x) {
+  std::string s = json_number(x);
+  if (s.size() > 2 && s.compare(s.size() - 2, 2, ".0") == 0) s.resize(s.size() - 2);
+  return s;
+}
+
 }  // namespace io

@@ -72,7 +72,10 @@ std::string printable(std::string_view s, std::size_t max_len = 200);
 /// `s` in single quotes, printable and at most 80 bytes: names inside messages.
 std::string in_quotes(std::string_view s);
 
-/// `x` in shortest round-trip form, -0 written as 0 (numbers in files and messages).
+/// `x` in shortest round-trip form as JSON writes it ("2.0", "0.001"), -0 written as 0.
 std::string json_number(double x);
+
+/// `x` for messages: json_number without a trailing ".0" ("2", "0.001").
+std::string message_number(double x);
 
 }  // namespace io

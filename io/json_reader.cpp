@@ -41,10 +41,10 @@ std::string dotted(const std::string& pointer) {
 std::string range_rule(const char* what, NumberRange r) {
   const bool has_lo = std::isfinite(r.lo), has_hi = std::isfinite(r.hi);
   if (has_lo && has_hi) {
-    return std::string(what) + " in [" + json_number(r.lo) + ", " + json_number(r.hi) + "]";
+    return std::string(what) + " in [" + message_number(r.lo) + ", " + message_number(r.hi) + "]";
   }
-  if (has_lo) return std::string(what) + " >= " + json_number(r.lo);
-  return std::string(what) + " <= " + json_number(r.hi);
+  if (has_lo) return std::string(what) + " >= " + message_number(r.lo);
+  return std::string(what) + " <= " + message_number(r.hi);
 }
 
 std::string joined(std::initializer_list<std::string_view> words) {
@@ -226,7 +226,8 @@ std::optional<double> JsonReader::number(const JsonField& field, NumberRange ran
     return std::nullopt;
   }
   if (x < range.lo || x > range.hi) {
-    fail(field, json_number(x) + " is out of range (rule: " + range_rule("a number", range) + ")");
+    fail(field,
+         message_number(x) + " is out of range (rule: " + range_rule("a number", range) + ")");
     return std::nullopt;
   }
   return x;
@@ -337,9 +338,9 @@ std::optional<Eigen::Quaterniond> JsonReader::quaternion(const JsonField& field,
   const double n = q.norm();
   if (!(n >= kMinQuaternionNorm && std::abs(n - 1.0) <= tolerance)) {
     const std::string rule = std::isfinite(tolerance)
-                                 ? "unit length within " + json_number(tolerance)
+                                 ? "unit length within " + message_number(tolerance)
                                  : "a quaternion of nonzero length";
-    const std::string norm = json_number(n);
+    const std::string norm = message_number(n);
     fail(field,
          (style_.wording == JsonWording::kRequest ? "quaternion norm is " + norm
                                                   : "quaternion [w, x, y, z] has norm " + norm) +
@@ -359,19 +360,17 @@ void JsonFields::fail(const JsonField& field, const std::string& rule) {
   throw JsonFieldError(reader_.location(field.pointer()), field.pointer(), rule);
 }
 
-const JsonField& JsonFields::present(const JsonField& field) {
+JsonField JsonFields::present(const JsonField& field) {
   reader_.present(field);
   return field;
 }
 
-const JsonField& JsonFields::object(const JsonField& field) {
+JsonField JsonFields::object(const JsonField& field) {
   reader_.object(field);
   return field;
 }
 
-const JsonField& JsonFields::array(const JsonField& field,
-                                   std::size_t max_size,
-                                   std::string_view what) {
+JsonField JsonFields::array(const JsonField& field, std::size_t max_size, std::string_view what) {
   reader_.array(field, max_size, what);
   return field;
 }
@@ -391,6 +390,13 @@ double JsonFields::number_or(const JsonField& field, double fallback, NumberRang
 
 std::int64_t JsonFields::integer(const JsonField& field, std::int64_t lo, std::int64_t hi) {
   return *reader_.integer(field, lo, hi);
+}
+
+std::int64_t JsonFields::integer_or(const JsonField& field,
+                                    std::int64_t fallback,
+                                    std::int64_t lo,
+                                    std::int64_t hi) {
+  return field.exists() ? integer(field, lo, hi) : fallback;
 }
 
 bool JsonFields::boolean(const JsonField& field) { return *reader_.boolean(field); }

@@ -87,7 +87,7 @@ enum class JsonWording { kDocument, kRequest };
 
 /// How a reader names fields in its messages.
 struct JsonStyle {
-  std::string base;                    // prefix of every location (a message type, a section)
+  std::string base = "";               // prefix of every location (a message type, a section)
   bool dotted = false;                 // "base.a.0" instead of "base/a/0"
   std::string root = "document root";  // location of the whole document when base is empty
   JsonWording wording = JsonWording::kDocument;
@@ -194,11 +194,11 @@ class JsonFields {
   std::string kind(const nlohmann::json& value) const { return reader_.kind(value); }
 
   // shape checks return the field, so that `f.object(doc["settings"])["damping"]` reads on
-  const JsonField& present(const JsonField& field);
-  const JsonField& object(const JsonField& field);
-  const JsonField& array(const JsonField& field,
-                         std::size_t max_size = kAnySize,
-                         std::string_view what = "");
+  JsonField present(const JsonField& field);
+  JsonField object(const JsonField& field);
+  JsonField array(const JsonField& field,
+                  std::size_t max_size = kAnySize,
+                  std::string_view what = "");
   void warn_unknown_keys(const JsonField& object, std::initializer_list<std::string_view> known) {
     reader_.warn_unknown_keys(object, known);
   }
@@ -207,6 +207,10 @@ class JsonFields {
   double number(const JsonField& field, NumberRange range = {});
   double number_or(const JsonField& field, double fallback, NumberRange range = {});
   std::int64_t integer(const JsonField& field, std::int64_t lo, std::int64_t hi);
+  std::int64_t integer_or(const JsonField& field,
+                          std::int64_t fallback,
+                          std::int64_t lo,
+                          std::int64_t hi);
   bool boolean(const JsonField& field);
   bool boolean_or(const JsonField& field, bool fallback);
   std::string string(const JsonField& field);
