@@ -11,6 +11,8 @@
 
 namespace animator {
 
+using io::JsonField;
+using io::JsonFields;
 using nlohmann::json;
 
 namespace {
@@ -18,9 +20,6 @@ namespace {
 json vec(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 json vec3(const core::Vector3& v) { return {v.x(), v.y(), v.z()}; }
 json quat(const core::Quaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
-
-using io::JsonField;
-using io::JsonFields;
 
 // Sessions embed a character (up to 64 MiB) and clips and edit layers of any length; the caps
 // only keep a damaged or hostile file from costing unbounded memory.
@@ -31,16 +30,6 @@ constexpr io::JsonLimits kSessionLimits{.max_bytes = std::size_t{1} << 30,
 constexpr double kUnitTolerance = 1e-6;
 constexpr std::int64_t kMinInt = std::numeric_limits<int>::min();
 constexpr std::int64_t kMaxInt = std::numeric_limits<int>::max();
-
-// Runs `read`, turning the reader's field errors into SessionError (same message).
-template <typename Read>
-auto as_session_error(Read&& read) -> decltype(read()) {
-  try {
-    return read();
-  } catch (const io::JsonFieldError& e) {
-    throw SessionError(e.what());
-  }
-}
 
 json clip_to_json(const core::Clip& c) {
   json frames = json::array();
@@ -211,7 +200,7 @@ json settings_to_json(const ik::SolverSettings& s) {
 
 void settings_from_json(const json& j, ik::SolverSettings& s) {
   JsonFields f(io::JsonStyle{.base = "settings"});
-  as_session_error([&] { read_settings(f, JsonField(j), s); });
+  io::rethrow_as<SessionError>([&] { read_settings(f, JsonField(j), s); });
   if (const std::string e = ik::validate(s); !e.empty()) throw SessionError("settings: " + e);
 }
 
@@ -284,11 +273,11 @@ std::unique_ptr<Session> session_from_json(const json& j, const std::string& sou
   }
   JsonFields f(io::JsonStyle{.root = "/"});
   const std::string character =
-      as_session_error([&] { return f.present(doc["character"])->dump(); });
+      io::rethrow_as<SessionError>([&] { return f.present(doc["character"])->dump(); });
   const io::LoadResult loaded =
       io::load_character_json_string(character, source + "#/character", "");
   const core::Model& m = *loaded.model;
-  return as_session_error([&] {
+  return io::rethrow_as<SessionError>([&] {
     const std::string name = doc["character_name"] ? f.string(doc["character_name"]) : m.name;
     auto session = std::make_unique<Session>(loaded.model, name);
     Document d = read_document(f, doc, m);

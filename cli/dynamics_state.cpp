@@ -125,7 +125,7 @@ json by_joint(const core::Model& m, const Eigen::VectorXd& x) {
 
 NamedState read_named_state(const core::Model& m, const json& state) {
   JsonFields f = request_fields();
-  return as_request([&] { return read_state(f, m, JsonField(state)); });
+  return io::rethrow_as<RequestError>([&] { return read_state(f, m, JsonField(state)); });
 }
 
 std::vector<std::string> velocity_names(const core::Model& m) {

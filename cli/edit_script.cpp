@@ -118,7 +118,7 @@ core::Vector3 ScriptDrag::at(double t) const {
 
 EditScript parse_edit_script(const nlohmann::json& j, const core::Model& model) {
   JsonFields f = request_fields();
-  return as_request([&] { return parse_script(f, JsonField(j), model); });
+  return io::rethrow_as<RequestError>([&] { return parse_script(f, JsonField(j), model); });
 }
 
 void run_edit_script(animator::Session& session, const EditScript& script) {

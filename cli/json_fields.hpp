@@ -1,7 +1,8 @@
 // Request files of the command line (`pindrag solve`, `edit`, `dynamics`), read through the
 // project's JSON reader (io/json_reader.hpp) in the request style: fields named as JSON pointers,
 // "/" for the whole document, nlohmann's type names ("expected a number, got string"), unknown
-// keys warned about on stderr. Errors reach the commands as RequestError.
+// keys warned about on stderr. Errors reach the commands as RequestError
+// (io::rethrow_as<RequestError>).
 #pragma once
 
 #include <cstddef>
@@ -28,15 +29,5 @@ nlohmann::json read_json_file(const std::string& path, std::size_t max_bytes = k
 
 /// A reader in the request style; its warnings go to stderr as "warning: <field>: <what>".
 io::JsonFields request_fields();
-
-/// Runs `read`, turning the reader's io::JsonFieldError into RequestError (same message).
-template <typename Read>
-auto as_request(Read&& read) -> decltype(read()) {
-  try {
-    return read();
-  } catch (const io::JsonFieldError& e) {
-    throw RequestError(e.what());
-  }
-}
 
 }  // namespace cli

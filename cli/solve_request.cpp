@@ -23,19 +23,21 @@ using nlohmann::json;
 // otherwise change nothing and go unnoticed.
 const std::initializer_list<std::string_view> kRequestKeys = {
     "character", "frames", "dt", "settings", "drag", "drags", "pins", "joint_references", "start"};
-const std::initializer_list<std::string_view> kSettingsKeys = {"damping",
-                                                                   "iterations",
-                                                                   "gains",
-                                                                   "damping_schedule",
-                                                                   "manipulability_threshold",
-                                                                   "top_damping",
-                                                                   "top_singular_value",
-                                                                   "range_damping",
-                                                                   "max_position_error",
-                                                                   "max_orientation_error",
-                                                                   "limit_margin",
-                                                                   "max_joint_step",
-                                                                   "joint_weights"};
+const std::initializer_list<std::string_view> kSettingsKeys = {
+    "damping",
+    "iterations",
+    "gains",
+    "damping_schedule",
+    "manipulability_threshold",
+    "top_damping",
+    "top_singular_value",
+    "range_damping",
+    "max_position_error",
+    "max_orientation_error",
+    "limit_margin",
+    "max_joint_step",
+    "joint_weights",
+};
 
 int link_by_name(JsonFields& f, const JsonField& field, const core::Model& m) {
   const std::string name = f.string(field);
@@ -265,7 +267,7 @@ json frame_errors(const std::vector<DragSpec>& drags,
 
 json run_solve_request(const json& request) {
   JsonFields f = request_fields();
-  Request r = as_request([&] { return read_request(f, JsonField(request)); });
+  Request r = io::rethrow_as<RequestError>([&] { return read_request(f, JsonField(request)); });
   const core::Model& m = *r.model;
   Eigen::VectorXd& q = r.q;
   core::Data data(m);

@@ -223,4 +223,15 @@ class JsonFields {
   JsonReader reader_;
 };
 
+/// Runs `read`, rethrowing JsonFieldError as `Error` with the same message, so that each layer
+/// keeps its own exception type (cli::RequestError, animator::SessionError, ...).
+template <typename Error, typename Read>
+auto rethrow_as(Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const JsonFieldError& e) {
+    throw Error(e.what());
+  }
+}
+
 }  // namespace io
