@@ -52,8 +52,9 @@ constexpr std::size_t kAnySize = std::numeric_limits<std::size_t>::max();
 /// with no value, so it can be named (as missing) before it is known to exist.
 class JsonField {
  public:
-  /// The whole document: pointer "".
+  /// The whole document: pointer "". The field refers to `document`, which must outlive it.
   explicit JsonField(const nlohmann::json& document) : value_(&document) {}
+  explicit JsonField(const nlohmann::json&& document) = delete;
   /// `value` (nullptr: absent) named by `pointer`.
   JsonField(const nlohmann::json* value, std::string pointer)
       : value_(value), pointer_(std::move(pointer)) {}
