@@ -20,16 +20,16 @@ nlohmann::json session_to_json(const Session& session, bool include_character = 
 /// @throws SessionError (or core::ModelError for the embedded character) naming the field
 std::unique_ptr<Session> session_from_json(const nlohmann::json& j, const std::string& source);
 
-/// Writes atomically: a temp file in the same folder, fsync, then rename over `path`.
+/// Writes atomically (io/atomic_file.hpp): a temp file in the same folder, fsync, then rename
+/// over `path`. @throws SessionError naming the path and the step that failed
 void save_session(const Session& session, const std::string& path);
+/// Reads a session file (size, nesting and value count capped; duplicate keys refused).
+/// @throws SessionError naming the path and the line and column or the field
 std::unique_ptr<Session> load_session(const std::string& path);
 
 /// The settings as JSON and back (also used by the wire protocol of the server).
 nlohmann::json settings_to_json(const ik::SolverSettings& s);
 /// Applies the keys present in j to `s`; unknown keys and bad values raise SessionError.
 void settings_from_json(const nlohmann::json& j, ik::SolverSettings& s);
-
-/// Writes `bytes` to `path` atomically (temp file in the same folder, fsync, rename).
-void write_file_atomically(const std::string& path, const std::string& bytes);
 
 }  // namespace animator

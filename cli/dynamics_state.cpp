@@ -10,34 +10,34 @@ namespace cli {
 
 namespace {
 
+using io::JsonField;
+using io::JsonFields;
 using nlohmann::json;
 
 // array of exactly n entries, else an error naming the field and the expected form
-const json& array_of(const json& j, size_t n, const std::string& field, const char* form) {
-  if (!j.is_array() || j.size() != n) {
-    throw RequestError(
-        field + ": expected " + form + ", got " +
-        (j.is_array() ? "an array of " + std::to_string(j.size()) : std::string(j.type_name())));
+void array_of(JsonFields& f, const JsonField& j, std::size_t n, const char* form) {
+  if (!j->is_array() || j->size() != n) {
+    f.fail(j, std::string("expected ") + form + ", got " +
+                  (j->is_array() ? "an array of " + std::to_string(j->size()) : f.kind(*j)));
   }
-  return j;
 }
 
 // one joint's velocity-like entry (v, a or tau) into out[iv ..]
 void read_velocity(
-    const core::Model& m, int i, const json& j, const std::string& field, Eigen::VectorXd& out) {
+    JsonFields& f, const core::Model& m, int i, const JsonField& j, Eigen::VectorXd& out) {
   const int iv = m.idx_v[i];
   switch (m.joint_type[i]) {
     case core::JointType::kRevolute:
     case core::JointType::kPrismatic:
-      out[iv] = number(j, field);
+      out[iv] = f.number(j);
       break;
     case core::JointType::kSpherical:
-      array_of(j, 3, field, "3 numbers [x, y, z] (child frame)");
-      for (int k = 0; k < 3; ++k) out[iv + k] = number(j[k], field + "/" + std::to_string(k));
+      array_of(f, j, 3, "3 numbers [x, y, z] (child frame)");
+      for (std::size_t k = 0; k < 3; ++k) out[iv + k] = f.number(j[k]);
       break;
     case core::JointType::kFree:
-      array_of(j, 6, field, "6 numbers [ωx, ωy, ωz, vx, vy, vz] (child frame)");
-      for (int k = 0; k < 6; ++k) out[iv + k] = number(j[k], field + "/" + std::to_string(k));
+      array_of(f, j, 6, "6 numbers [ωx, ωy, ωz, vx, vy, vz] (child frame)");
+      for (std::size_t k = 0; k < 6; ++k) out[iv + k] = f.number(j[k]);
       break;
     case core::JointType::kFixed:
       break;
@@ -46,23 +46,24 @@ void read_velocity(
 
 // one joint's configuration entry into q[iq ..]
 void read_configuration(
-    const core::Model& m, int i, const json& j, const std::string& field, Eigen::VectorXd& q) {
+    JsonFields& f, const core::Model& m, int i, const JsonField& j, Eigen::VectorXd& q) {
   const int iq = m.idx_q[i];
   switch (m.joint_type[i]) {
     case core::JointType::kRevolute:
     case core::JointType::kPrismatic:
-      q[iq] = number(j, field);
+      q[iq] = f.number(j);
       break;
     case core::JointType::kSpherical:
-      core::set_quaternion_at(q, iq, quaternion_wxyz(j, field));
+      core::set_quaternion_at(q, iq, f.quaternion(j));
       break;
     case core::JointType::kFree: {
-      array_of(j, 7, field, "7 numbers [x, y, z, w, qx, qy, qz]");
-      for (int k = 0; k < 3; ++k) q[iq + k] = number(j[k], field + "/" + std::to_string(k));
+      array_of(f, j, 7, "7 numbers [x, y, z, w, qx, qy, qz]");
+      for (std::size_t k = 0; k < 3; ++k) q[iq + k] = f.number(j[k]);
       // the quaternion part keeps its index in the field name (/q/root/3 … /q/root/6)
-      for (int k = 3; k < 7; ++k) number(j[k], field + "/" + std::to_string(k));
-      const json wxyz = json::array({j[3], j[4], j[5], j[6]});
-      core::set_quaternion_at(q, iq + 3, quaternion_wxyz(wxyz, field + " (quaternion part)"));
+      for (std::size_t k = 3; k < 7; ++k) f.number(j[k]);
+      const json wxyz = json::array({(*j)[3], (*j)[4], (*j)[5], (*j)[6]});
+      core::set_quaternion_at(q, iq + 3,
+                              f.quaternion(JsonField(&wxyz, j.pointer() + " (quaternion part)")));
       break;
     }
     case core::JointType::kFixed:
@@ -72,20 +73,37 @@ void read_configuration(
 
 // {"joint": value, ...} for key `key` of the state, each joint through `read`
 template <typename Read>
-void read_section(const core::Model& m, const json& state, const char* key, Read&& read) {
-  if (!state.contains(key)) return;
-  const std::string field = std::string("/") + key;
-  const json& section = state[key];
-  if (!section.is_object()) throw RequestError(field + ": expected an object keyed by joint name");
-  for (const auto& [name, value] : section.items()) {
-    const std::string f = field + "/" + name;
+void read_section(
+    JsonFields& f, const core::Model& m, const JsonField& state, const char* key, Read&& read) {
+  const JsonField section = state[key];
+  if (!section) return;
+  if (!section->is_object()) f.fail(section, "expected an object keyed by joint name");
+  for (const auto& [name, value] : section->items()) {
+    const JsonField joint = section[name];
     const int i = m.joint_index(name);
-    if (i < 1) throw RequestError(f + ": unknown joint '" + name + "' in '" + m.name + "'");
+    if (i < 1) f.fail(joint, "unknown joint " + io::in_quotes(name) + " in '" + m.name + "'");
     if (m.joint_type[i] == core::JointType::kFixed) {
-      throw RequestError(f + ": joint '" + name + "' is fixed and has no coordinates");
+      f.fail(joint, "joint " + io::in_quotes(name) + " is fixed and has no coordinates");
     }
-    read(i, value, f);
+    read(i, joint);
   }
+}
+
+NamedState read_state(JsonFields& f, const core::Model& m, const JsonField& state) {
+  if (!state->is_object()) f.fail(state, "expected an object with q, v, a and tau");
+  f.warn_unknown_keys(state, {"q", "v", "a", "tau"});
+  NamedState s;
+  s.q = core::neutral_configuration(m);
+  s.v = s.a = s.tau = Eigen::VectorXd::Zero(m.nv);
+  read_section(f, m, state, "q",
+               [&](int i, const JsonField& j) { read_configuration(f, m, i, j, s.q); });
+  read_section(f, m, state, "v",
+               [&](int i, const JsonField& j) { read_velocity(f, m, i, j, s.v); });
+  read_section(f, m, state, "a",
+               [&](int i, const JsonField& j) { read_velocity(f, m, i, j, s.a); });
+  read_section(f, m, state, "tau",
+               [&](int i, const JsonField& j) { read_velocity(f, m, i, j, s.tau); });
+  return s;
 }
 
 // a velocity-space vector as {"joint": number or array}
@@ -106,22 +124,8 @@ json by_joint(const core::Model& m, const Eigen::VectorXd& x) {
 }  // namespace
 
 NamedState read_named_state(const core::Model& m, const json& state) {
-  if (!state.is_object()) throw RequestError("/: expected an object with q, v, a and tau");
-  warn_unknown_keys(state, "", {"q", "v", "a", "tau"});
-  NamedState s;
-  s.q = core::neutral_configuration(m);
-  s.v = s.a = s.tau = Eigen::VectorXd::Zero(m.nv);
-  read_section(m, state, "q", [&](int i, const json& j, const std::string& f) {
-    read_configuration(m, i, j, f, s.q);
-  });
-  read_section(m, state, "v",
-               [&](int i, const json& j, const std::string& f) { read_velocity(m, i, j, f, s.v); });
-  read_section(m, state, "a",
-               [&](int i, const json& j, const std::string& f) { read_velocity(m, i, j, f, s.a); });
-  read_section(m, state, "tau", [&](int i, const json& j, const std::string& f) {
-    read_velocity(m, i, j, f, s.tau);
-  });
-  return s;
+  JsonFields f = request_fields();
+  return io::rethrow_as<RequestError>([&] { return read_state(f, m, JsonField(state)); });
 }
 
 std::vector<std::string> velocity_names(const core::Model& m) {

@@ -12,106 +12,96 @@ namespace cli {
 
 namespace {
 
+using io::JsonField;
+using io::JsonFields;
+
 // most edits, pins per edit and drag keys per edit a script may hold
 constexpr std::size_t kMaxEdits = 1000;
 constexpr std::size_t kMaxPins = 64;
 constexpr std::size_t kMaxKeys = 100000;
 
-const nlohmann::json& member(const nlohmann::json& object, const char* key, const std::string& field) {
-  if (!object.contains(key)) throw RequestError(field + "/" + key + ": missing (rule: required)");
-  return object.at(key);
-}
-
-void require_object(const nlohmann::json& j, const std::string& field) {
-  if (!j.is_object()) throw RequestError(field + ": expected an object, got " + std::string(j.type_name()));
-}
-
-const nlohmann::json& array_member(const nlohmann::json& object, const char* key,
-                                   const std::string& field, std::size_t max) {
-  const nlohmann::json& a = member(object, key, field);
-  if (!a.is_array()) throw RequestError(field + "/" + key + ": expected an array, got " + std::string(a.type_name()));
-  if (a.size() > max) {
-    throw RequestError(field + "/" + key + ": " + std::to_string(a.size()) +
-                       " entries (rule: at most " + std::to_string(max) + ")");
-  }
-  return a;
-}
-
-int link_named(const nlohmann::json& j, const std::string& field, const core::Model& model) {
-  const std::string name = string(j, field);
+int link_named(JsonFields& f, const JsonField& field, const core::Model& model) {
+  const std::string name = f.string(field);
   const int link = model.link_index(name);
-  if (link <= 0) throw RequestError(field + ": unknown link '" + name + "'");
+  if (link <= 0) f.fail(field, "unknown link " + io::in_quotes(name));
   return link;
 }
 
-ik::TaskMode pin_mode(const nlohmann::json& j, const std::string& field) {
-  const std::string m = string(j, field);
-  if (m == "pose") return ik::TaskMode::kPose;
-  if (m == "position") return ik::TaskMode::kPosition;
-  throw RequestError(field + ": '" + m + "' (rule: \"pose\" or \"position\")");
+// a pin of an edit holds its position, or its whole pose
+ik::TaskMode pin_mode(JsonFields& f, const JsonField& field) {
+  const std::string m = f.string(field);
+  const auto mode = ik::task_mode_from_string(m);
+  if (!mode || *mode == ik::TaskMode::kOrientation) {
+    f.fail(field, io::in_quotes(m) + " (rule: \"pose\" or \"position\")");
+  }
+  return *mode;
 }
 
-ScriptPin parse_pin(const nlohmann::json& j, const std::string& field, const core::Model& model) {
-  require_object(j, field);
-  warn_unknown_keys(j, field, {"link", "mode", "point"});
+ScriptPin parse_pin(JsonFields& f, const JsonField& j, const core::Model& model) {
+  f.object(j);
+  f.warn_unknown_keys(j, {"link", "mode", "point"});
   ScriptPin p;
-  p.link = link_named(member(j, "link", field), field + "/link", model);
-  if (j.contains("mode")) p.mode = pin_mode(j["mode"], field + "/mode");
-  if (j.contains("point")) p.point = vector3(j["point"], field + "/point");
+  p.link = link_named(f, j["link"], model);
+  if (j["mode"]) p.mode = pin_mode(f, j["mode"]);
+  if (j["point"]) p.point = f.vector3(j["point"]);
   return p;
 }
 
-ScriptDrag parse_drag(const nlohmann::json& j, const std::string& field, const core::Model& model) {
-  require_object(j, field);
-  warn_unknown_keys(j, field, {"link", "point", "relative", "keys"});
+ScriptDrag parse_drag(JsonFields& f, const JsonField& j, const core::Model& model) {
+  f.object(j);
+  f.warn_unknown_keys(j, {"link", "point", "relative", "keys"});
   ScriptDrag d;
-  d.link = link_named(member(j, "link", field), field + "/link", model);
-  if (j.contains("point")) d.point = vector3(j["point"], field + "/point");
-  if (j.contains("relative")) {
-    if (!j["relative"].is_boolean()) throw RequestError(field + "/relative: expected true or false");
-    d.relative = j["relative"].get<bool>();
-  }
-  const nlohmann::json& keys = array_member(j, "keys", field, kMaxKeys);
-  if (keys.empty()) throw RequestError(field + "/keys: empty (rule: at least one key)");
+  d.link = link_named(f, j["link"], model);
+  if (j["point"]) d.point = f.vector3(j["point"]);
+  d.relative = f.boolean_or(j["relative"], d.relative);
+  const JsonField keys = f.array(j["keys"], kMaxKeys, "entries");
+  if (keys.size() == 0) f.fail(keys, "empty (rule: at least one key)");
   for (std::size_t k = 0; k < keys.size(); ++k) {
-    const std::string kf = field + "/keys/" + std::to_string(k);
-    require_object(keys[k], kf);
-    warn_unknown_keys(keys[k], kf, {"time", "position"});
-    DragKey key{number(member(keys[k], "time", kf), kf + "/time"),
-                vector3(member(keys[k], "position", kf), kf + "/position")};
-    if (!d.keys.empty() && !(key.time > d.keys.back().time)) {
-      throw RequestError(kf + "/time: " + std::to_string(key.time) +
-                         " (rule: key times strictly increase)");
+    const JsonField key = f.object(keys[k]);
+    f.warn_unknown_keys(key, {"time", "position"});
+    const DragKey parsed{f.number(key["time"]), f.vector3(key["position"])};
+    if (!d.keys.empty() && !(parsed.time > d.keys.back().time)) {
+      f.fail(key["time"], io::message_number(parsed.time) + " (rule: key times strictly increase)");
     }
-    d.keys.push_back(key);
+    d.keys.push_back(parsed);
   }
   return d;
 }
 
-ScriptEdit parse_edit(const nlohmann::json& j, const std::string& field, const core::Model& model) {
-  require_object(j, field);
-  warn_unknown_keys(j, field, {"start", "end", "pins", "drag"});
+ScriptEdit parse_edit(JsonFields& f, const JsonField& j, const core::Model& model) {
+  f.object(j);
+  f.warn_unknown_keys(j, {"start", "end", "pins", "drag"});
   ScriptEdit e;
-  e.start = number(member(j, "start", field), field + "/start");
-  e.end = number(member(j, "end", field), field + "/end");
-  if (e.start < 0) throw RequestError(field + "/start: " + std::to_string(e.start) + " (rule: >= 0)");
-  if (!(e.end > e.start)) {
-    throw RequestError(field + "/end: " + std::to_string(e.end) + " (rule: after start)");
-  }
-  if (j.contains("pins")) {
-    const nlohmann::json& pins = array_member(j, "pins", field, kMaxPins);
-    for (std::size_t k = 0; k < pins.size(); ++k) {
-      e.pins.push_back(parse_pin(pins[k], field + "/pins/" + std::to_string(k), model));
+  e.start = f.number(j["start"], {.lo = 0});
+  e.end = f.number(j["end"]);
+  if (!(e.end > e.start)) f.fail(j["end"], io::message_number(e.end) + " (rule: after start)");
+  if (const JsonField pins = j["pins"]) {
+    for (std::size_t k = 0; k < f.array(pins, kMaxPins, "entries").size(); ++k) {
+      e.pins.push_back(parse_pin(f, pins[k], model));
     }
   }
-  e.drag = parse_drag(member(j, "drag", field), field + "/drag", model);
+  e.drag = parse_drag(f, j["drag"], model);
   for (const ScriptPin& p : e.pins) {
     if (p.link == e.drag.link) {
-      throw RequestError(field + "/drag/link: '" + model.link_name[p.link] +
-                         "' is pinned in this edit (rule: the dragged link is not pinned)");
+      f.fail(j["drag"]["link"],
+             io::in_quotes(model.link_name[p.link]) +
+                 " is pinned in this edit (rule: the dragged link is not pinned)");
     }
   }
   return e;
+}
+
+EditScript parse_script(JsonFields& f, const JsonField& j, const core::Model& model) {
+  f.object(j);
+  f.warn_unknown_keys(j, {"falloff", "edits"});
+  EditScript s;
+  s.falloff = f.number_or(j["falloff"], s.falloff, {.lo = 0, .hi = 60});  // seconds
+  const JsonField edits = f.array(j["edits"], kMaxEdits, "entries");
+  if (edits.size() == 0) f.fail(edits, "empty (rule: at least one edit)");
+  for (std::size_t k = 0; k < edits.size(); ++k) {
+    s.edits.push_back(parse_edit(f, edits[k], model));
+  }
+  return s;
 }
 
 }  // namespace
@@ -127,19 +117,8 @@ core::Vector3 ScriptDrag::at(double t) const {
 }
 
 EditScript parse_edit_script(const nlohmann::json& j, const core::Model& model) {
-  require_object(j, "/");  // the top level
-  warn_unknown_keys(j, "", {"falloff", "edits"});
-  EditScript s;
-  s.falloff = number_or(j, "falloff", "", s.falloff);
-  if (s.falloff < 0 || s.falloff > 60) {
-    throw RequestError("/falloff: " + std::to_string(s.falloff) + " (rule: in [0, 60] seconds)");
-  }
-  const nlohmann::json& edits = array_member(j, "edits", "", kMaxEdits);
-  if (edits.empty()) throw RequestError("/edits: empty (rule: at least one edit)");
-  for (std::size_t k = 0; k < edits.size(); ++k) {
-    s.edits.push_back(parse_edit(edits[k], "/edits/" + std::to_string(k), model));
-  }
-  return s;
+  JsonFields f = request_fields();
+  return io::rethrow_as<RequestError>([&] { return parse_script(f, JsonField(j), model); });
 }
 
 void run_edit_script(animator::Session& session, const EditScript& script) {
@@ -170,7 +149,8 @@ void run_edit_script(animator::Session& session, const EditScript& script) {
     if (first >= last) {
       throw RequestError("/edits/" + std::to_string(k) + "/start: " + std::to_string(e.start) +
                          " s (rule: the window must hold at least one frame after start within "
-                         "the clip's " + std::to_string(clip->duration()) + " s)");
+                         "the clip's " +
+                         std::to_string(clip->duration()) + " s)");
     }
     session.seek(first * ft);
     for (const ScriptPin& p : e.pins) session.pin(p.link, p.mode, p.point);

@@ -1,11 +1,16 @@
-// Reading request files: typed fields with errors that name the field (as a JSON pointer).
+// Request files of the command line (`pindrag solve`, `edit`, `dynamics`), read through the
+// project's JSON reader (io/json_reader.hpp) in the request style: fields named as JSON pointers,
+// "/" for the whole document, nlohmann's type names ("expected a number, got string"), unknown
+// keys warned about on stderr. Errors reach the commands as RequestError
+// (io::rethrow_as<RequestError>).
 #pragma once
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
+#include <cstddef>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+
+#include "io/json_reader.hpp"
 
 namespace cli {
 
@@ -15,19 +20,14 @@ class RequestError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Parses a request file (size-capped); errors carry the line and column of a syntax error.
-nlohmann::json read_json_file(const std::string& path, std::size_t max_bytes = 16u << 20);
+/// Largest request file accepted (bytes).
+constexpr std::size_t kMaxRequestBytes = std::size_t{16} << 20;
 
-double number(const nlohmann::json& j, const std::string& field);
-double number_or(const nlohmann::json& parent, const char* key, const std::string& field,
-                 double fallback);
-int integer_in(const nlohmann::json& j, const std::string& field, int lo, int hi);
-std::string string(const nlohmann::json& j, const std::string& field);
-Eigen::Vector3d vector3(const nlohmann::json& j, const std::string& field);
-/// [w, x, y, z], normalized; must have a norm within 1e-3 of 1
-Eigen::Quaterniond quaternion_wxyz(const nlohmann::json& j, const std::string& field);
-/// Warns on stderr about keys of `object` that are not in `known`.
-void warn_unknown_keys(const nlohmann::json& object, const std::string& field,
-                       std::initializer_list<const char*> known);
+/// Parses a request file: size-capped, depth- and value-capped, duplicate keys refused.
+/// @throws RequestError "<path>: <reason>", or "<path>:<line>:<column>: invalid JSON: <reason>"
+nlohmann::json read_json_file(const std::string& path, std::size_t max_bytes = kMaxRequestBytes);
+
+/// A reader in the request style; its warnings go to stderr as "warning: <field>: <what>".
+io::JsonFields request_fields();
 
 }  // namespace cli

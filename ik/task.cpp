@@ -99,4 +99,11 @@ TaskError reference_task_error(const core::Model& model, const Eigen::VectorXd& 
   return e;
 }
 
+std::optional<TaskMode> task_mode_from_string(std::string_view s) {
+  for (TaskMode m : {TaskMode::kPosition, TaskMode::kOrientation, TaskMode::kPose}) {
+    if (s == to_string(m)) return m;
+  }
+  return std::nullopt;
+}
+
 }  // namespace ik

@@ -99,4 +99,7 @@ TaskError link_task_error(const core::Data& data, int link, const Vector3& p_Lin
 TaskError reference_task_error(const core::Model& model, const Eigen::VectorXd& q,
                                const JointReferenceTask& t);
 
+/// The mode named by to_string ("position", "orientation", "pose"); nullopt for other text.
+std::optional<TaskMode> task_mode_from_string(std::string_view s);
+
 }  // namespace ik

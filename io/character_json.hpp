@@ -19,18 +19,16 @@
 #include <cstddef>
 #include <string>
 
-#include "io/model_file.hpp"
 #include "core/model.hpp"
 #include "io/core_names.hpp"
+#include "io/json_parse.hpp"
+#include "io/model_file.hpp"
 
 namespace io {
 
-/// Largest character file accepted (bytes); larger files are refused before reading.
+/// Largest character file accepted (bytes); larger files are refused before reading. Nesting and
+/// value count are capped at kMaxJsonDepth and kMaxJsonValues (io/json_parse.hpp).
 constexpr std::size_t kMaxCharacterJsonBytes = std::size_t{64} << 20;
-/// Deepest nesting of arrays and objects accepted (the format itself needs 7 levels).
-constexpr int kMaxJsonDepth = 64;
-/// Most JSON values (numbers, strings, arrays, ...) one document may hold.
-constexpr std::size_t kMaxJsonValues = std::size_t{1} << 22;
 /// The value of the "format" key and the version this build reads and writes.
 inline constexpr const char* kCharacterFormat = "pindrag-character";
 constexpr int kCharacterFormatVersion = 1;
