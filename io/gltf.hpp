@@ -27,9 +27,9 @@
 namespace io {
 
 struct GltfExportOptions {
-  std::string name;            // scene and animation name; empty: the model's name
-  bool stick_figure = false;   // add a box-per-bone mesh skinned rigidly to the links
-  double stick_radius = 0.01;  // half width of a stick-figure box (m)
+  std::string name;                   // scene and animation name; empty: the model's name
+  bool stick_figure = false;          // add a box-per-bone mesh skinned rigidly to the links
+  double stick_radius = 0.01;         // half width of a stick-figure box (m)
   std::string generator = "pindrag";  // asset.generator
 };
 
