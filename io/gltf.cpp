@@ -4,6 +4,8 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <unordered_set>
 
@@ -22,6 +24,8 @@ using namespace gltf_detail;
 namespace {
 
 using core::JointType;
+
+constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
 
 // three.js binds animation tracks by sanitized node name: keep names to [A-Za-z0-9_] and unique
 std::vector<std::string> node_names(const Model& model) {
@@ -42,9 +46,9 @@ std::vector<std::string> node_names(const Model& model) {
   return names;
 }
 
-Json vec3(const Vector3& v) { return Json::array({v.x(), v.y(), v.z()}); }
+std::vector<double> vec3(const Vector3& v) { return {v.x(), v.y(), v.z()}; }
 // glTF quaternion order is (x, y, z, w)
-Json quat(const Quaternion& q) { return Json::array({q.x(), q.y(), q.z(), q.w()}); }
+std::vector<double> quat(const Quaternion& q) { return {q.x(), q.y(), q.z(), q.w()}; }
 
 // column-major 4x4 of a rigid transform, as a glTF MAT4 (bottom row exactly 0 0 0 1)
 void append_mat4(const Transform& X, std::vector<float>& out) {
@@ -107,7 +111,7 @@ void check_input(const Model& model,
   }
 }
 
-// the document while it is built: the buffer and the top-level arrays
+// the document while it is built
 struct Parts {
   Parts(const Model& m, std::string scene_name)
       : model(m), name(std::move(scene_name)), node_name(node_names(m)), placement(m.njoints) {
@@ -119,32 +123,28 @@ struct Parts {
   std::vector<std::string> node_name;   // per link
   std::vector<Quaternion> placement;    // per link: X_PJ's rotation as a unit quaternion
   std::vector<Transform> inverse_bind;  // per link
-  BufferBuilder buf;
-  Json nodes = Json::array();
-  Json scene_nodes = Json::array();
-  Json skins = Json::array();
-  Json meshes = Json::array();
-  Json materials = Json::array();
-  Json animations = Json::array();
+  tinygltf::Model doc;
+  BufferBuilder buf{doc};
 };
 
 // nodes: link i is node i - 1, at the neutral configuration (the bind pose); roots are scene
 // nodes
 void add_link_nodes(Parts& d, const Eigen::VectorXd& q0) {
   const Model& model = d.model;
-  std::vector<Json> children(model.njoints, Json::array());
-  for (int i = 2; i < model.njoints; ++i) {
-    if (model.parent[i] >= 1) children[model.parent[i]].push_back(i - 1);
-  }
+  d.doc.scenes.resize(1);
+  d.doc.nodes.resize(model.nlinks());
   for (int i = 1; i < model.njoints; ++i) {
     const LocalPose X = local_pose(model, d.placement, i, q0);
-    Json n = {{"name", d.node_name[i]}};
-    if (!children[i].empty()) n["children"] = children[i];
-    n["translation"] = vec3(X.translation);
-    n["rotation"] = quat(X.rotation.normalized());
-    if (d.node_name[i] != model.link_name[i]) n["extras"] = {{"link", model.link_name[i]}};
-    d.nodes.push_back(std::move(n));
-    if (model.parent[i] == 0) d.scene_nodes.push_back(i - 1);
+    tinygltf::Node& n = d.doc.nodes[i - 1];
+    n.name = d.node_name[i];
+    n.translation = vec3(X.translation);
+    n.rotation = quat(X.rotation.normalized());
+    if (d.node_name[i] != model.link_name[i]) {
+      n.extras =
+          tinygltf::Value(tinygltf::Value::Object{{"link", tinygltf::Value(model.link_name[i])}});
+    }
+    if (model.parent[i] == 0) d.doc.scenes[0].nodes.push_back(i - 1);
+    if (model.parent[i] >= 1) d.doc.nodes[model.parent[i] - 1].children.push_back(i - 1);
   }
 }
 
@@ -152,37 +152,45 @@ void add_link_nodes(Parts& d, const Eigen::VectorXd& q0) {
 void add_skin(Parts& d) {
   std::vector<float> ibm;
   ibm.reserve(16 * d.model.nlinks());
-  Json joints = Json::array();
+  tinygltf::Skin skin;
   for (int i = 1; i < d.model.njoints; ++i) {
     append_mat4(d.inverse_bind[i], ibm);
-    joints.push_back(i - 1);
+    skin.joints.push_back(i - 1);
   }
-  const int ibm_accessor = d.buf.add_floats(ibm, 16, "MAT4", false, 0);
-  d.skins.push_back({{"name", d.name + "_skeleton"},
-                     {"inverseBindMatrices", ibm_accessor},
-                     {"skeleton", d.scene_nodes[0]},
-                     {"joints", std::move(joints)}});
+  skin.name = d.name + "_skeleton";
+  skin.inverseBindMatrices = d.buf.add_floats(ibm, 16, TINYGLTF_TYPE_MAT4, false, 0);
+  skin.skeleton = d.doc.scenes[0].nodes[0];
+  d.doc.skins.push_back(std::move(skin));
 }
 
-// POSITION (with bounds), NORMAL, JOINTS_0 and WEIGHTS_0 accessors of n vertices
-Json add_attributes(BufferBuilder& buf,
-                    const std::vector<float>& pos,
-                    const std::vector<float>& nrm,
-                    const std::vector<std::uint16_t>& jnt,
-                    const std::vector<float>& wgt,
-                    std::size_t n) {
-  return {{"POSITION", buf.add_floats(pos, 3, "VEC3", true, kArrayBuffer)},
-          {"NORMAL", buf.add_floats(nrm, 3, "VEC3", false, kArrayBuffer)},
-          {"JOINTS_0", buf.add_integers(jnt, kUnsignedShort, "VEC4", n, kArrayBuffer)},
-          {"WEIGHTS_0", buf.add_floats(wgt, 4, "VEC4", false, kArrayBuffer)}};
-}
-
-Json material(const std::string& name, const Eigen::Vector4d& color, double roughness) {
-  return {{"name", name},
-          {"pbrMetallicRoughness",
-           {{"baseColorFactor", {color[0], color[1], color[2], color[3]}},
-            {"metallicFactor", 0.0},
-            {"roughnessFactor", roughness}}}};
+// a mesh of one triangle primitive (POSITION with bounds, NORMAL, JOINTS_0, WEIGHTS_0, indices)
+// and its material
+void add_mesh(Parts& d,
+              const std::string& name,
+              const MeshArrays& m,
+              const std::vector<float>& wgt,
+              const std::vector<double>& color,
+              double roughness) {
+  const std::size_t n = m.pos.size() / 3;
+  tinygltf::Primitive p;
+  p.attributes["POSITION"] = d.buf.add_floats(m.pos, 3, TINYGLTF_TYPE_VEC3, true, kArrayBuffer);
+  p.attributes["NORMAL"] = d.buf.add_floats(m.nrm, 3, TINYGLTF_TYPE_VEC3, false, kArrayBuffer);
+  p.attributes["JOINTS_0"] = d.buf.add_integers(m.jnt, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                                TINYGLTF_TYPE_VEC4, n, kArrayBuffer);
+  p.attributes["WEIGHTS_0"] = d.buf.add_floats(wgt, 4, TINYGLTF_TYPE_VEC4, false, kArrayBuffer);
+  if (!m.idx.empty()) p.indices = d.buf.add_indices(m.idx, n);
+  p.material = static_cast<int>(d.doc.materials.size());
+  p.mode = TINYGLTF_MODE_TRIANGLES;  // tinygltf always writes the mode, -1 when unset
+  tinygltf::Material mat;
+  mat.name = name;
+  mat.pbrMetallicRoughness.baseColorFactor = color;
+  mat.pbrMetallicRoughness.metallicFactor = 0.0;
+  mat.pbrMetallicRoughness.roughnessFactor = roughness;
+  d.doc.materials.push_back(std::move(mat));
+  tinygltf::Mesh mesh;
+  mesh.name = name;
+  mesh.primitives.push_back(std::move(p));
+  d.doc.meshes.push_back(std::move(mesh));
 }
 
 // the skinned mesh with its material (base colour, clamped to [0, 1])
@@ -190,31 +198,23 @@ void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
   std::vector<int> skin_joint_of_bone;
   for (int link : skin.bones) skin_joint_of_bone.push_back(link - 1);
   const size_t n = skin.positions.size();
-  std::vector<float> pos, nrm, wgt(4 * n);
-  std::vector<std::uint16_t> jnt(4 * n);
-  pos.reserve(3 * n);
-  nrm.reserve(3 * n);
+  MeshArrays m;
+  std::vector<float> wgt(4 * n);
+  m.jnt.resize(4 * n);
   const std::vector<Eigen::Vector3f> normals = unit_normals(skin);
   for (size_t v = 0; v < n; ++v) {
-    pos.insert(pos.end(), {skin.positions[v].x(), skin.positions[v].y(), skin.positions[v].z()});
-    nrm.insert(nrm.end(), {normals[v].x(), normals[v].y(), normals[v].z()});
-    normalized_influences(skin.joints[v], skin.weights[v], skin_joint_of_bone, &jnt[4 * v],
+    m.pos.insert(m.pos.end(),
+                 {skin.positions[v].x(), skin.positions[v].y(), skin.positions[v].z()});
+    m.nrm.insert(m.nrm.end(), {normals[v].x(), normals[v].y(), normals[v].z()});
+    normalized_influences(skin.joints[v], skin.weights[v], skin_joint_of_bone, &m.jnt[4 * v],
                           &wgt[4 * v]);
   }
-  std::vector<std::uint32_t> idx;
-  idx.reserve(3 * skin.triangles.size());
   for (const auto& t : skin.triangles) {
-    idx.insert(idx.end(), {static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]),
-                           static_cast<std::uint32_t>(t[2])});
+    m.idx.insert(m.idx.end(), {static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]),
+                               static_cast<std::uint32_t>(t[2])});
   }
-  Json primitive = {{"attributes", add_attributes(d.buf, pos, nrm, jnt, wgt, n)},
-                    {"material", d.materials.size()}};
-  if (!idx.empty()) primitive["indices"] = d.buf.add_indices(idx, n);
-  const std::string name = skin.name.empty() ? "skin" : skin.name;
   const Eigen::Vector4f c = skin.base_color.cwiseMax(0.0f).cwiseMin(1.0f);
-  // the float components, promoted to double as they always were
-  d.materials.push_back(material(name, c.cast<double>(), 0.8));
-  d.meshes.push_back({{"name", name}, {"primitives", Json::array({std::move(primitive)})}});
+  add_mesh(d, skin.name.empty() ? "skin" : skin.name, m, wgt, {c[0], c[1], c[2], c[3]}, 0.8);
 }
 
 // the stick figure: a box from each link to each child, a cube on each link origin
@@ -229,15 +229,9 @@ void add_stick_figure(Parts& d, double r) {
       append_box(X_bind, Vector3::Zero(), model.X_PJ[c].p, r, i - 1, m);
     }
   }
-  const size_t n = m.pos.size() / 3;
-  std::vector<float> wgt(4 * n, 0.0f);
-  for (size_t v = 0; v < n; ++v) wgt[4 * v] = 1.0f;
-  Json primitive = {{"attributes", add_attributes(d.buf, m.pos, m.nrm, m.jnt, wgt, n)},
-                    {"indices", d.buf.add_indices(m.idx, n)},
-                    {"material", d.materials.size()}};
-  d.materials.push_back(material("stick_figure", Eigen::Vector4d(0.55, 0.65, 0.8, 1.0), 0.6));
-  d.meshes.push_back(
-      {{"name", "stick_figure"}, {"primitives", Json::array({std::move(primitive)})}});
+  std::vector<float> wgt(4 * (m.pos.size() / 3), 0.0f);
+  for (size_t v = 0; v < wgt.size(); v += 4) wgt[v] = 1.0f;
+  add_mesh(d, "stick_figure", m, wgt, {0.55, 0.65, 0.8, 1.0}, 0.6);
 }
 
 // key times k · frame_time as floats, which must strictly increase
@@ -284,64 +278,49 @@ void link_keys(
 
 // the animation: one LINEAR sampler per animated channel, one key per frame
 void add_animation(Parts& d, const Clip& clip) {
-  const int input = d.buf.add_floats(key_times(clip), 1, "SCALAR", true, 0);
-  Json samplers = Json::array(), channels = Json::array();
+  const int input = d.buf.add_floats(key_times(clip), 1, TINYGLTF_TYPE_SCALAR, true, 0);
+  tinygltf::Animation an;
+  an.name = d.name;
   std::vector<float> rot, tra;
   for (int i = 1; i < d.model.njoints; ++i) {
     const JointType t = d.model.joint_type[i];
     if (!animates_rotation(t) && !animates_translation(t)) continue;
     link_keys(d, i, clip, rot, tra);
     auto add_channel = [&](int output, const char* path) {
-      channels.push_back(
-          {{"sampler", samplers.size()}, {"target", {{"node", i - 1}, {"path", path}}}});
-      samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
+      tinygltf::AnimationChannel ch;
+      ch.sampler = static_cast<int>(an.samplers.size());
+      ch.target_node = i - 1;
+      ch.target_path = path;
+      an.channels.push_back(std::move(ch));
+      tinygltf::AnimationSampler s;
+      s.input = input;
+      s.output = output;
+      s.interpolation = "LINEAR";
+      an.samplers.push_back(std::move(s));
     };
     if (animates_translation(t)) {
-      add_channel(d.buf.add_floats(tra, 3, "VEC3", false, 0), "translation");
+      add_channel(d.buf.add_floats(tra, 3, TINYGLTF_TYPE_VEC3, false, 0), "translation");
     }
-    if (animates_rotation(t)) add_channel(d.buf.add_floats(rot, 4, "VEC4", false, 0), "rotation");
+    if (animates_rotation(t)) {
+      add_channel(d.buf.add_floats(rot, 4, TINYGLTF_TYPE_VEC4, false, 0), "rotation");
+    }
   }
-  if (!channels.empty()) {
-    d.animations.push_back(
-        {{"name", d.name}, {"channels", std::move(channels)}, {"samplers", std::move(samplers)}});
-  }
+  if (!an.channels.empty()) d.doc.animations.push_back(std::move(an));
 }
 
-struct Document {
-  Json json;
-  std::vector<std::uint8_t> bin;
-};
-
-// the top-level properties in their order, and the buffer
-Document assemble(Parts& d, const std::string& generator) {
-  Document doc;
-  Json& j = doc.json;
-  j["asset"] = {{"version", "2.0"}, {"generator", generator}};
-  j["scene"] = 0;
-  j["scenes"] = Json::array({{{"name", d.name}, {"nodes", std::move(d.scene_nodes)}}});
-  j["nodes"] = std::move(d.nodes);
-  if (!d.meshes.empty()) {
-    j["meshes"] = std::move(d.meshes);
-    j["materials"] = std::move(d.materials);
-  }
-  j["skins"] = std::move(d.skins);
-  if (!d.animations.empty()) j["animations"] = std::move(d.animations);
-  j["accessors"] = std::move(d.buf.accessors());
-  j["bufferViews"] = std::move(d.buf.views());
-  j["buffers"] = Json::array({{{"byteLength", d.buf.data().size()}}});
-  doc.bin = d.buf.data();
-  return doc;
-}
-
-Document build(const Model& model,
-               const Clip* clip,
-               const SkinnedMesh* skin,
-               const GltfExportOptions& options) {
+tinygltf::Model build(const Model& model,
+                      const Clip* clip,
+                      const SkinnedMesh* skin,
+                      const GltfExportOptions& options) {
   if (skin != nullptr && skin->empty()) skin = nullptr;
   check_input(model, clip, skin, options);
   Parts d(model, options.name.empty() ? model.name : options.name);
+  d.doc.asset.version = "2.0";
+  d.doc.asset.generator = options.generator;
+  d.doc.defaultScene = 0;
   const Eigen::VectorXd q0 = core::neutral_configuration(model);
   add_link_nodes(d, q0);
+  d.doc.scenes[0].name = d.name;
   // inverse bind: of the neutral pose, or the mesh's own for its bones
   core::Data data(model);
   core::forward_kinematics(model, data, q0);
@@ -356,12 +335,26 @@ Document build(const Model& model,
   if (skin != nullptr) add_skinned_mesh(d, *skin);
   if (options.stick_figure) add_stick_figure(d, options.stick_radius);
   // mesh nodes: roots with an identity transform, skinned by skin 0
-  for (size_t m = 0; m < d.meshes.size(); ++m) {
-    d.nodes.push_back({{"name", d.meshes[m]["name"]}, {"mesh", m}, {"skin", 0}});
-    d.scene_nodes.push_back(d.nodes.size() - 1);
+  for (size_t m = 0; m < d.doc.meshes.size(); ++m) {
+    tinygltf::Node n;
+    n.name = d.doc.meshes[m].name;
+    n.mesh = static_cast<int>(m);
+    n.skin = 0;
+    d.doc.nodes.push_back(std::move(n));
+    d.doc.scenes[0].nodes.push_back(static_cast<int>(d.doc.nodes.size()) - 1);
   }
   if (clip != nullptr && !clip->empty()) add_animation(d, *clip);
-  return assemble(d, options.generator);
+  return std::move(d.doc);
+}
+
+// .gltf text (indented JSON, the buffer as a base64 data URI, a final newline) or GLB bytes
+// (compact JSON chunk, BIN chunk, both padded to 4 bytes), as tinygltf writes them
+std::string serialize(const tinygltf::Model& doc, bool binary) {
+  std::ostringstream out;
+  if (!tinygltf::TinyGLTF().WriteGltfSceneToStream(&doc, out, !binary, binary)) {
+    throw std::runtime_error("glTF export: tinygltf could not write the document");
+  }
+  return out.str();
 }
 
 }  // namespace
@@ -370,17 +363,19 @@ std::string write_gltf(const Model& model,
                        const Clip* clip,
                        const SkinnedMesh* skin,
                        const GltfExportOptions& options) {
-  Document doc = build(model, clip, skin, options);
-  doc.json["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(doc.bin);
-  return doc.json.dump(1) + "\n";
+  return serialize(build(model, clip, skin, options), false);
 }
 
 std::vector<std::uint8_t> write_glb(const Model& model,
                                     const Clip* clip,
                                     const SkinnedMesh* skin,
                                     const GltfExportOptions& options) {
-  const Document doc = build(model, clip, skin, options);
-  return glb_container(doc.json.dump(), doc.bin);
+  const std::string bytes = serialize(build(model, clip, skin, options), true);
+  // tinygltf's GLB header holds 32-bit lengths, which wrap past 4 GiB
+  if (bytes.size() > std::numeric_limits<std::uint32_t>::max()) {
+    throw std::invalid_argument("glTF export: the GLB would exceed 4 GiB");
+  }
+  return std::vector<std::uint8_t>(bytes.begin(), bytes.end());
 }
 
 void save_gltf_file(const std::string& path,
