@@ -11,8 +11,6 @@ namespace io::assimp_detail {
 
 namespace {
 
-// a node scale this far from 1 (after the unit scale) cannot be carried by a rigid link
-constexpr double kScaleTolerance = 1e-3;
 // most frames one clip may have after resampling
 constexpr double kMaxFrames = 1e6;
 

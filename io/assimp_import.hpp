@@ -3,7 +3,8 @@
 // bugs on hostile files (ecosystem.md §7.2), so it never runs in the caller's process. What
 // comes back is our own data, validated again by the parent: a core::Model (the character JSON
 // of io/character_json.hpp), a core::SkinnedMesh and core::Clips. docs/formats.md has the
-// details.
+// details. Inside: the child's work and the converter stages in io/assimp_child.hpp, the bytes
+// it sends back in io/assimp_reply.hpp.
 //
 // The model: one link per bone of the skinned meshes (and per node between bones), named after
 // its node (unnamed glTF nodes: assimp's "nodes[N]", N the glTF node index). The root is the

@@ -19,6 +19,10 @@ namespace io::assimp_detail {
 
 using Matrix4 = Eigen::Matrix4d;
 
+/// A node scale this far from 1 (after the unit scale) cannot be carried by a rigid link: the
+/// bind pose or a clip that has one gets a warning.
+constexpr double kScaleTolerance = 1e-3;
+
 /// aiMatrix4x4 (row-major, translation in the last column) as an Eigen matrix.
 Matrix4 to_eigen(const aiMatrix4x4& m);
 /// T · R · S as an affine matrix.

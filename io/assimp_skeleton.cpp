@@ -12,9 +12,6 @@ namespace io::assimp_detail {
 
 namespace {
 
-// a node scale this far from 1 (after the unit scale) cannot be carried by a rigid link
-constexpr double kScaleTolerance = 1e-3;
-
 // the deepest node above every bone: the lowest common ancestor of all bone nodes
 int common_root(const std::vector<Node>& nodes, const std::map<int, Matrix4>& offset) {
   int root = offset.begin()->first;
