@@ -5,6 +5,7 @@ find_package(urdfdom REQUIRED)
 find_package(tinyxml2 REQUIRED)  # URDF elements urdfdom drops
 find_package(CLI11 REQUIRED)
 find_package(Threads REQUIRED)
+find_package(TinyGLTF REQUIRED)  # glTF writer (io/gltf), Debian builds it as a shared library
 find_package(assimp REQUIRED)  # skinned-character import (io/assimp_import), Debian 5.2.5
 # server: Boost.Beast/Asio (header-only in 1.74) and cpp-httplib, which Debian ships compiled: its
 # pkg-config -D flags must reach every user or the program crashes (reference/platform.md §2)

@@ -3,7 +3,8 @@
 // bugs on hostile files (ecosystem.md §7.2), so it never runs in the caller's process. What
 // comes back is our own data, validated again by the parent: a core::Model (the character JSON
 // of io/character_json.hpp), a core::SkinnedMesh and core::Clips. docs/formats.md has the
-// details.
+// details. Inside: the child's work and the converter stages in io/assimp_child.hpp, the bytes
+// it sends back in io/assimp_reply.hpp.
 //
 // The model: one link per bone of the skinned meshes (and per node between bones), named after
 // its node (unnamed glTF nodes: assimp's "nodes[N]", N the glTF node index). The root is the
@@ -31,25 +32,25 @@
 #include <vector>
 
 #include "core/clip.hpp"
-#include "io/sandbox.hpp"
 #include "core/model.hpp"
 #include "core/skin.hpp"
 #include "io/core_names.hpp"
+#include "io/sandbox.hpp"
 
 namespace io {
 
 /// Resources the import may use; above them it stops with an error naming the file.
 struct ImportLimits {
-  std::size_t max_file_bytes = std::size_t{256} << 20;  // refused before the child starts
-  std::size_t memory_bytes = std::size_t{512} << 20;    // child address space (RLIMIT_AS headroom)
-  int cpu_seconds = 20;                                 // child CPU time (RLIMIT_CPU)
-  double timeout_seconds = 60;                          // wall clock
+  std::size_t max_file_bytes = std::size_t{256} << 20;   // refused before the child starts
+  std::size_t memory_bytes = std::size_t{512} << 20;     // child address space (RLIMIT_AS headroom)
+  int cpu_seconds = 20;                                  // child CPU time (RLIMIT_CPU)
+  double timeout_seconds = 60;                           // wall clock
   std::size_t max_reply_bytes = std::size_t{256} << 20;  // results the child may send back
 };
 
 struct ImportOptions {
-  double frame_rate = 30;   // clip frames per second (> 0, <= 1000)
-  double total_mass = 70;   // kg, shared by the links in proportion to their bone lengths
+  double frame_rate = 30;  // clip frames per second (> 0, <= 1000)
+  double total_mass = 70;  // kg, shared by the links in proportion to their bone lengths
   // a non-root bone whose offset from its parent moves more than this (metres) during a clip
   // gets a free joint, so the clip is reproduced; below it the bone is spherical
   double translating_tolerance = 1e-3;
@@ -57,16 +58,16 @@ struct ImportOptions {
 
 /// One animation of the file, resampled.
 struct ImportedClip {
-  std::string name;          // the file's animation name (may be empty)
-  double start_time = 0;     // file time (s) of frame 0: the animation's first key
-  core::Clip clip;           // frames at 1 / frame_rate, of the imported model
+  std::string name;       // the file's animation name (may be empty)
+  double start_time = 0;  // file time (s) of frame 0: the animation's first key
+  core::Clip clip;        // frames at 1 / frame_rate, of the imported model
 };
 
 struct SkinnedImport {
   std::shared_ptr<const Model> model;
-  SkinnedMesh mesh;                 // bones are link indices of `model`
+  SkinnedMesh mesh;  // bones are link indices of `model`
   std::vector<ImportedClip> clips;
-  double unit_scale = 1;            // metres per file unit applied to the file's lengths
+  double unit_scale = 1;  // metres per file unit applied to the file's lengths
   /// Per link (njoints; 0 for the world and the root): the largest distance over all clips
   /// between the bone's animated offset from its parent and its bind offset, which a spherical
   /// joint keeps (metres). Free (translating) joints reproduce their offsets: 0.

@@ -1,5 +1,7 @@
 // glTF 2.0 export (.gltf with an embedded base64 buffer, or binary .glb) of a character, its
-// clip and its skinned mesh. docs/formats.md describes what is written and why.
+// clip and its skinned mesh. docs/formats.md describes what is written and why. The document
+// is built as a tinygltf::Model and serialized by tinygltf (Debian's libtinygltf, 2.7), which
+// also writes the base64 data URI and the GLB container.
 //
 // What a file holds:
 //  - one node per link (fixed joints included) with translation/rotation (never `matrix`), in a
@@ -27,9 +29,9 @@
 namespace io {
 
 struct GltfExportOptions {
-  std::string name;            // scene and animation name; empty: the model's name
-  bool stick_figure = false;   // add a box-per-bone mesh skinned rigidly to the links
-  double stick_radius = 0.01;  // half width of a stick-figure box (m)
+  std::string name;                   // scene and animation name; empty: the model's name
+  bool stick_figure = false;          // add a box-per-bone mesh skinned rigidly to the links
+  double stick_radius = 0.01;         // half width of a stick-figure box (m)
   std::string generator = "pindrag";  // asset.generator
 };
 

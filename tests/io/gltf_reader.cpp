@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "io/read_file.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace gltf_test {
@@ -62,18 +63,22 @@ std::uint32_t u32_at(const std::vector<std::uint8_t>& b, size_t at) {
 size_t component_size(int type) {
   switch (type) {
     case 5120:
-    case 5121: return 1;
+    case 5121:
+      return 1;
     case 5122:
-    case 5123: return 2;
+    case 5123:
+      return 2;
     case 5125:
-    case 5126: return 4;
+    case 5126:
+      return 4;
   }
   return 0;
 }
 
 double component_at(const std::uint8_t* p, int type) {
   switch (type) {
-    case 5121: return *p;
+    case 5121:
+      return *p;
     case 5123: {
       std::uint16_t v;
       std::memcpy(&v, p, 2);
@@ -93,11 +98,35 @@ double component_at(const std::uint8_t* p, int type) {
   return 0;
 }
 
-Eigen::Matrix4d trs(const Eigen::Vector3d& t, const Eigen::Quaterniond& r, const Eigen::Vector3d& s) {
+Eigen::Matrix4d trs(const Eigen::Vector3d& t,
+                    const Eigen::Quaterniond& r,
+                    const Eigen::Vector3d& s) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   m.topLeftCorner<3, 3>() = r.toRotationMatrix() * s.asDiagonal();
   m.topRightCorner<3, 1>() = t;
   return m;
+}
+
+// a node's static translation, rotation and scale (identity defaults)
+struct NodeTrs {
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond r = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d s = Eigen::Vector3d::Ones();
+};
+NodeTrs node_trs(const Json& node) {
+  NodeTrs x;
+  if (node.contains("translation")) {
+    for (int k = 0; k < 3; ++k) x.t[k] = node["translation"][k];
+  }
+  if (node.contains("rotation")) {
+    const Json& q = node["rotation"];
+    x.r = Eigen::Quaterniond(q[3].get<double>(), q[0].get<double>(), q[1].get<double>(),
+                             q[2].get<double>());
+  }
+  if (node.contains("scale")) {
+    for (int k = 0; k < 3; ++k) x.s[k] = node["scale"][k];
+  }
+  return x;
 }
 
 }  // namespace
@@ -223,7 +252,8 @@ void check_layout(const Document& doc, std::vector<std::string>& errors) {
     for (const Json& an : j["animations"]) {
       for (const Json& s : an.at("samplers")) {
         const Json& a = acc.at(s.at("input").get<size_t>());
-        if (!a.contains("min") || !a.contains("max")) errors.push_back("animation input without bounds");
+        if (!a.contains("min") || !a.contains("max"))
+          errors.push_back("animation input without bounds");
       }
     }
   }
@@ -239,7 +269,8 @@ std::vector<double> read_accessor(const Document& doc, int a) {
   const size_t base = v.value("byteOffset", size_t{0}) + x.value("byteOffset", size_t{0});
   if (base + count * nc * cs > doc.bin.size()) throw std::runtime_error("accessor out of buffer");
   std::vector<double> out(count * nc);
-  for (size_t k = 0; k < count * nc; ++k) out[k] = component_at(doc.bin.data() + base + k * cs, type);
+  for (size_t k = 0; k < count * nc; ++k)
+    out[k] = component_at(doc.bin.data() + base + k * cs, type);
   return out;
 }
 
@@ -249,19 +280,8 @@ Eigen::Matrix4d static_local(const Json& node) {
     for (int k = 0; k < 16; ++k) m(k % 4, k / 4) = node["matrix"][k].get<double>();
     return m;
   }
-  Eigen::Vector3d t = Eigen::Vector3d::Zero(), s = Eigen::Vector3d::Ones();
-  Eigen::Quaterniond r = Eigen::Quaterniond::Identity();
-  if (node.contains("translation")) {
-    for (int k = 0; k < 3; ++k) t[k] = node["translation"][k];
-  }
-  if (node.contains("rotation")) {
-    const Json& q = node["rotation"];
-    r = Eigen::Quaterniond(q[3].get<double>(), q[0].get<double>(), q[1].get<double>(), q[2].get<double>());
-  }
-  if (node.contains("scale")) {
-    for (int k = 0; k < 3; ++k) s[k] = node["scale"][k];
-  }
-  return trs(t, r, s);
+  const NodeTrs x = node_trs(node);
+  return trs(x.t, x.r, x.s);
 }
 
 std::vector<std::vector<Eigen::Matrix4d>> world_matrices_at_keys(const Document& doc, int a) {
@@ -273,16 +293,13 @@ std::vector<std::vector<Eigen::Matrix4d>> world_matrices_at_keys(const Document&
     for (const Json& c : nodes[i]["children"]) parent[c.get<size_t>()] = static_cast<int>(i);
   }
   // static T, R, S per node
-  std::vector<Eigen::Vector3d> T(n, Eigen::Vector3d::Zero()), S(n, Eigen::Vector3d::Ones());
-  std::vector<Eigen::Quaterniond> R(n, Eigen::Quaterniond::Identity());
+  std::vector<Eigen::Vector3d> T(n), S(n);
+  std::vector<Eigen::Quaterniond> R(n);
   for (size_t i = 0; i < n; ++i) {
-    const Json& node = nodes[i];
-    if (node.contains("translation")) for (int k = 0; k < 3; ++k) T[i][k] = node["translation"][k];
-    if (node.contains("rotation")) {
-      const Json& q = node["rotation"];
-      R[i] = Eigen::Quaterniond(q[3].get<double>(), q[0].get<double>(), q[1].get<double>(), q[2].get<double>());
-    }
-    if (node.contains("scale")) for (int k = 0; k < 3; ++k) S[i][k] = node["scale"][k];
+    const NodeTrs x = node_trs(nodes[i]);
+    T[i] = x.t;
+    R[i] = x.r;
+    S[i] = x.s;
   }
   size_t nkeys = 1;
   struct Channel {
@@ -308,7 +325,8 @@ std::vector<std::vector<Eigen::Matrix4d>> world_matrices_at_keys(const Document&
     std::vector<Eigen::Quaterniond> r = R;
     for (const Channel& c : channels) {
       const double* v = c.values.data();
-      if (c.path == "translation") t[c.node] = Eigen::Vector3d(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
+      if (c.path == "translation")
+        t[c.node] = Eigen::Vector3d(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
       if (c.path == "scale") s[c.node] = Eigen::Vector3d(v[3 * k], v[3 * k + 1], v[3 * k + 2]);
       if (c.path == "rotation") {
         r[c.node] = Eigen::Quaterniond(v[4 * k + 3], v[4 * k], v[4 * k + 1], v[4 * k + 2]);
@@ -321,8 +339,8 @@ std::vector<std::vector<Eigen::Matrix4d>> world_matrices_at_keys(const Document&
       for (int j = static_cast<int>(i); j >= 0 && !done[j]; j = parent[j]) chain.push_back(j);
       for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
         const int j = *it;
-        const Eigen::Matrix4d local = nodes[j].contains("matrix") ? static_local(nodes[j])
-                                                                   : trs(t[j], r[j], s[j]);
+        const Eigen::Matrix4d local =
+            nodes[j].contains("matrix") ? static_local(nodes[j]) : trs(t[j], r[j], s[j]);
         out[k][j] = parent[j] >= 0 ? Eigen::Matrix4d(out[k][parent[j]] * local) : local;
         done[j] = 1;
       }
@@ -347,8 +365,10 @@ CommandResult run(const std::string& command, bool merge_stderr) {
 std::string quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
-    if (c == '\'') out += "'\\''";
-    else out += c;
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -392,8 +412,8 @@ TempDir::~TempDir() {
 }
 
 std::vector<std::uint8_t> read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+  const std::string bytes = io::read_file(path, std::size_t{1} << 30, "a file a test reads");
+  return std::vector<std::uint8_t>(bytes.begin(), bytes.end());
 }
 
 void write_bytes(const std::string& path, const std::string& bytes) {

@@ -1,7 +1,8 @@
 // A minimal glTF 2.0 reader for the tests (nlohmann-json), written against the specification and
-// independent of io/gltf.cpp: it parses .gltf (data-URI buffer) and .glb, checks the
-// container and buffer layout, reads accessors and evaluates node world matrices at animation
-// keys. Also: running the Node.js helpers (three.js, Khronos validator) and assimp's CLI.
+// independent of io/gltf.cpp and of tinygltf, which serializes its documents: it parses .gltf
+// (data-URI buffer) and .glb, checks the container and buffer layout, reads accessors and
+// evaluates node world matrices at animation keys. Also: running the Node.js helpers (three.js,
+// Khronos validator) and assimp's CLI.
 #pragma once
 
 #include <Eigen/Core>
@@ -83,6 +84,7 @@ class TempDir {
   std::string dir_;
 };
 
+/// The bytes of a file (at most 1 GiB). @throws io::FileError naming the file
 std::vector<std::uint8_t> read_bytes(const std::string& path);
 void write_bytes(const std::string& path, const std::string& bytes);
 

@@ -1,0 +1,25 @@
+// The mesh stage of the skinned import (io/assimp_import.hpp), run in the child: the skinned
+// triangle meshes of the file merged into one core::SkinnedMesh in the bind pose, in our world
+// (metres, Y up). Up to four influences per vertex, the largest kept and renormalized; a vertex
+// without any follows the root. The base colour is the first mesh material's. Internal to io/.
+#pragma once
+
+#include <vector>
+
+#include "io/assimp_scene.hpp"
+#include "io/assimp_skeleton.hpp"
+
+namespace io::assimp_detail {
+
+/// The skinned mesh; its bones are the links that carry weights (model_link maps links to link
+/// indices of the model), each with the inverse of its bind pose.
+/// Requires: mesh_bind_spaces and bind_poses on `skinned` and `skeleton`.
+/// @throws std::runtime_error for more than INT_MAX vertices
+SkinnedMesh build_mesh(const aiScene& scene,
+                       const SkinnedMeshes& skinned,
+                       const WorldAxes& world,
+                       const Skeleton& skeleton,
+                       const std::vector<int>& model_link,
+                       Warnings& warnings);
+
+}  // namespace io::assimp_detail
