@@ -78,7 +78,7 @@ ik::SolverSettings settings_from(const json& r) {
 }
 
 struct DragSpec {
-  ik::DragTask task;
+  ik::LinkTask task{.role = ik::kDrag};
   int release_at = -1;  // frame at which the drag is let go; -1: never
 };
 
@@ -156,7 +156,7 @@ json run_solve_request(const json& r) {
       if (!p.is_object()) throw RequestError(field + ": expected an object");
       warn_unknown_keys(p, field, {"link", "mode", "target", "rotation", "point", "gain", "weight"});
       if (!p.contains("link")) throw RequestError(field + "/link: missing");
-      ik::PinTask pin;
+      ik::LinkTask pin{.role = ik::kPin};
       pin.link = link_by_name(m, p["link"], field + "/link");
       pin.mode = mode_from(p, field, ik::TaskMode::kPosition);
       if (p.contains("point")) pin.p_LinkPoint = vector3(p["point"], field + "/point");
@@ -211,8 +211,7 @@ json run_solve_request(const json& r) {
     json frame;
     double drag_error = 0, pin_p = 0, pin_r = 0;
     for (const DragSpec& d : drags) {
-      const ik::TaskError e = ik::link_task_error(data, d.task.link, d.task.p_LinkPoint, d.task.mode,
-                                                  d.task.target_W, d.task.target_R_W);
+      const ik::TaskError e = ik::link_task_error(data, d.task);
       drag_error = std::max(drag_error, d.task.mode == ik::TaskMode::kOrientation ? e.orientation : e.position);
     }
     for (const ik::TaskReport& t : rep.tasks) {
