@@ -120,7 +120,8 @@ class Solver {
   /// dt / iterations each. q is updated in place; data holds the final kinematics.
   /// A problem with a bad link or joint index, or a non-finite target or gain, is rejected:
   /// report().status is kRejected with a message naming the task, and q is not touched.
-  /// Allocation-free once the workspace has seen a problem of this size.
+  /// Allocation-free once the workspace has seen a problem with as many rows on levels 1 and 3
+  /// (ik/solver_workspace.hpp).
   const Report& step(const Problem& problem, core::Data& data, Eigen::VectorXd& q);
 
   const SolverSettings& settings() const { return settings_; }
@@ -138,7 +139,7 @@ class Solver {
   // range rows, so they reuse level 1 and the factorization of level 3 (ik/solver_levels.cpp)
   void solve_levels(bool first_round);
   void solve_drag_level();
-  void invert_damped_drag_gram(Eigen::Ref<Eigen::MatrixXd> G);
+  void invert_damped_drag_gram(const Eigen::Ref<const Eigen::MatrixXd>& G);
   void solve_range_level();
   void solve_pin_level(bool first_round);
   void factorize_pin_level();

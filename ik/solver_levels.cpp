@@ -1,6 +1,5 @@
 // The three levels of ik::Solver, each solved in the null space of the levels above it, in
 // weight-scaled coordinates x (θ̇ = diag(c) x; ik/solver_workspace.hpp has the notation).
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
@@ -62,7 +61,7 @@ void Solver::solve_drag_level() {
   w.x_drag.noalias() = J1.transpose() * t1;
 }
 
-void Solver::invert_damped_drag_gram(Eigen::Ref<Eigen::MatrixXd> G) {
+void Solver::invert_damped_drag_gram(const Eigen::Ref<const Eigen::MatrixXd>& G) {
   // damp only the directions whose singular value σ is below s0:
   // λ² = k (1 − σ²/s0²), G⁻¹ ≈ V diag(1 / (σ² + λ²)) Vᵀ
   const int m1 = ws_.drag_rows;
