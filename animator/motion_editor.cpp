@@ -41,9 +41,11 @@ void MotionEditor::begin(const core::Clip& base, const LayerStack& layers, int f
   layered_frame(model_, base, layers, frame, q_);
 }
 
-const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base, const LayerStack& layers,
-                                          int frame, const std::vector<Pin>& pins,
-                                          const std::optional<ik::DragTask>& drag) {
+const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base,
+                                          const LayerStack& layers,
+                                          int frame,
+                                          const std::vector<Pin>& pins,
+                                          const std::optional<ik::LinkTask>& drag) {
   // the reference: this frame of the layered clip. The solve starts from the clip frame carrying
   // the previous frame's displacement, so joints the pins and the drag do not need keep moving
   // with the clip, and the damping resists changes of the edit rather than the clip's motion.
@@ -58,11 +60,12 @@ const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base, const LayerSta
   problem_.clear();
   // moving pins: the pinned points follow the clip (eq. 8.30 with the full-gain feedback above)
   for (const Pin& p : pins) {
-    problem_.add(ik::PinTask{.link = p.link,
-                             .p_LinkPoint = p.p_LinkPoint,
-                             .target_W = ref_data_.X_W[p.link] * p.p_LinkPoint,
-                             .target_R_W = core::Quaternion(ref_data_.X_W[p.link].R),
-                             .mode = p.mode});
+    problem_.add(ik::LinkTask{.role = ik::kPin,
+                              .link = p.link,
+                              .p_LinkPoint = p.p_LinkPoint,
+                              .target_W = ref_data_.X_W[p.link] * p.p_LinkPoint,
+                              .target_R_W = core::Quaternion(ref_data_.X_W[p.link].R),
+                              .mode = p.mode});
   }
   // every joint follows the clip weakly (8.31), so only what the drag and pins need changes
   for (int j = 1; j < model_.njoints; ++j) {

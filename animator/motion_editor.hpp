@@ -30,8 +30,11 @@ class MotionEditor {
   /// Solves frame f: pins follow the layered clip (their link points' trajectories), joints
   /// follow its angles weakly, and the drag (if any) pulls on top. Records the frame's
   /// displacement. Returns the edited pose.
-  const Eigen::VectorXd& edit(const core::Clip& base, const LayerStack& layers, int frame,
-                              const std::vector<Pin>& pins, const std::optional<ik::DragTask>& drag);
+  const Eigen::VectorXd& edit(const core::Clip& base,
+                              const LayerStack& layers,
+                              int frame,
+                              const std::vector<Pin>& pins,
+                              const std::optional<ik::LinkTask>& drag);
 
   /// The recorded frames as an edit layer (gaps between recorded frames interpolated), or null
   /// when nothing was recorded.

@@ -396,11 +396,18 @@ bool Session::needs_tick() const { return playback_.playing || drag_.has_value()
 void Session::rebuild_problem() {
   problem_.clear();
   for (const Pin& p : doc_.pins) {
-    problem_.add(ik::PinTask{.link = p.link, .p_LinkPoint = p.p_LinkPoint, .target_W = p.target_W,
-                             .target_R_W = p.target_R_W, .mode = p.mode});
+    problem_.add(ik::LinkTask{.role = ik::kPin,
+                              .link = p.link,
+                              .p_LinkPoint = p.p_LinkPoint,
+                              .target_W = p.target_W,
+                              .target_R_W = p.target_R_W,
+                              .mode = p.mode});
   }
   if (drag_) {
-    ik::DragTask d{.link = drag_->link, .p_LinkPoint = drag_->p_LinkPoint, .target_W = drag_->target_W};
+    ik::LinkTask d{.role = ik::kDrag,
+                   .link = drag_->link,
+                   .p_LinkPoint = drag_->p_LinkPoint,
+                   .target_W = drag_->target_W};
     // feed-forward: the target's motion since the last step (Yamane eq. 8.8)
     d.velocity_W = (drag_->target_W - drag_->previous_target_W) / doc_.settings.dt;
     if (drag_->rotation) {
@@ -449,7 +456,10 @@ Session::TickResult Session::tick(double dt) {
         finish_motion_edit();
         start_motion_edit();
       }
-      ik::DragTask d{.link = drag_->link, .p_LinkPoint = drag_->p_LinkPoint, .target_W = drag_->target_W};
+      ik::LinkTask d{.role = ik::kDrag,
+                     .link = drag_->link,
+                     .p_LinkPoint = drag_->p_LinkPoint,
+                     .target_W = drag_->target_W};
       if (drag_->rotation) {
         d.target_R_W = *drag_->rotation;
         d.mode = ik::TaskMode::kPose;

@@ -112,7 +112,7 @@ void edit_in_motion(benchmark::State& state, const std::string& path, const Edit
   for (auto _ : state) {
     editor.begin(clip, no_layers, 0);
     for (int f = 1; f < clip.size(); ++f) {
-      const ik::DragTask drag{.link = hand, .target_W = targets[f]};
+      const ik::LinkTask drag{.role = ik::kDrag, .link = hand, .target_W = targets[f]};
       benchmark::DoNotOptimize(editor.edit(clip, no_layers, f, pins, drag).data());
     }
     state.PauseTiming();

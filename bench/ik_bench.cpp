@@ -39,12 +39,18 @@ struct Scene {
     core::forward_kinematics(m, d, q0);
     auto pose_of = [&](const char* name) { return d.X_W[m.link_index(name)]; };
     const core::Transform hand = pose_of("r_hand");
-    problem.add(ik::DragTask{.link = m.link_index("r_hand"), .target_W = hand.p + Vector3(-0.05, 0.08, 0.1),
-                             .target_R_W = Quaternion(hand.R), .mode = ik::TaskMode::kPose});
+    problem.add(ik::LinkTask{.role = ik::kDrag,
+                             .link = m.link_index("r_hand"),
+                             .target_W = hand.p + Vector3(-0.05, 0.08, 0.1),
+                             .target_R_W = Quaternion(hand.R),
+                             .mode = ik::TaskMode::kPose});
     for (const char* pin : {"l_foot", "r_foot", "l_hand", "head", "pelvis"}) {
       const core::Transform X = pose_of(pin);
-      problem.add(ik::PinTask{.link = m.link_index(pin), .target_W = X.p, .target_R_W = Quaternion(X.R),
-                              .mode = ik::TaskMode::kPose});
+      problem.add(ik::LinkTask{.role = ik::kPin,
+                               .link = m.link_index(pin),
+                               .target_W = X.p,
+                               .target_R_W = Quaternion(X.R),
+                               .mode = ik::TaskMode::kPose});
     }
     for (const char* j : {"abdomen", "chest", "neck", "l_uarm", "r_uarm", "l_thigh", "l_farm", "r_farm"}) {
       problem.add(ik::JointReferenceTask{.joint = m.link_index(j)});
@@ -86,14 +92,16 @@ void BM_IkStep_Dense(benchmark::State& state) {
     core::compute_joint_jacobians(m, data, q);
     int r1 = 0, r2 = 0;
     for (const auto& e : scene.problem.entries()) {
-      if (const auto* d = std::get_if<ik::DragTask>(&e.task)) {
-        ik::fill_link_task(m, data, d->link, d->p_LinkPoint, d->mode, d->target_W, d->target_R_W, d->velocity_W,
-                           d->angular_velocity_W, s.drag_gain, {}, point, J1.middleRows(r1, 6), v1.segment(r1, 6));
-        r1 += 6;
-      } else if (const auto* p = std::get_if<ik::PinTask>(&e.task)) {
-        ik::fill_link_task(m, data, p->link, p->p_LinkPoint, p->mode, p->target_W, p->target_R_W, p->velocity_W,
-                           p->angular_velocity_W, s.pin_gain, {}, point, J2.middleRows(r2, 6), v2.segment(r2, 6));
-        r2 += 6;
+      if (const auto* t = std::get_if<ik::LinkTask>(&e.task)) {
+        if (t->role == ik::kDrag) {
+          ik::fill_link_task(m, data, *t, s.drag_gain, {}, point, J1.middleRows(r1, 6),
+                             v1.segment(r1, 6));
+          r1 += 6;
+        } else {
+          ik::fill_link_task(m, data, *t, s.pin_gain, {}, point, J2.middleRows(r2, 6),
+                             v2.segment(r2, 6));
+          r2 += 6;
+        }
       } else if (const auto* j = std::get_if<ik::JointReferenceTask>(&e.task)) {
         const int rows = ik::task_rows(m, *j);
         ik::fill_reference_task(m, q, *j, s.reference_gain, {}, J2.middleRows(r2, rows), v2.segment(r2, rows));

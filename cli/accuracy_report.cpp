@@ -42,10 +42,13 @@ void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSett
   std::vector<int> pins;
   for (const char* foot : {"l_foot", "r_foot"}) {
     const int l = m.link_index(foot);
-    pins.push_back(problem.add(ik::PinTask{.link = l, .target_W = data.X_W[l].p,
-                                           .target_R_W = Quaternion(data.X_W[l].R), .mode = ik::TaskMode::kPose}));
+    pins.push_back(problem.add(ik::LinkTask{.role = ik::kPin,
+                                            .link = l,
+                                            .target_W = data.X_W[l].p,
+                                            .target_R_W = Quaternion(data.X_W[l].R),
+                                            .mode = ik::TaskMode::kPose}));
   }
-  ik::DragTask drag;
+  ik::LinkTask drag{.role = ik::kDrag};
   Vector3 start = Vector3::Zero(), goal = Vector3::Zero();
   Quaternion r_start = Quaternion::Identity(), r_goal = Quaternion::Identity();
   int ramp = sc.frames * 3 / 4;
@@ -69,7 +72,7 @@ void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSett
   Vector3 previous = start;
   for (int f = 0; f < sc.frames; ++f) {
     const double s = ease(double(f + 1) / ramp);
-    ik::DragTask* d = problem.get<ik::DragTask>(drag_id);
+    ik::LinkTask* d = problem.get<ik::LinkTask>(drag_id);
     if (d->mode == ik::TaskMode::kOrientation) {
       d->target_R_W = r_start.slerp(s, r_goal);
     } else {

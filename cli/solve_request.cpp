@@ -98,7 +98,7 @@ ik::SolverSettings settings_from(JsonFields& f, const JsonField& r) {
 }
 
 struct DragSpec {
-  ik::DragTask task;
+  ik::LinkTask task{.role = ik::kDrag};
   int release_at = -1;  // frame at which the drag is let go; -1: never
 };
 
@@ -126,13 +126,13 @@ DragSpec drag_from(JsonFields& f, const JsonField& j, const core::Model& m) {
 }
 
 // A pin's target and rotation default to where the pinned point is in `data` (frame 0).
-ik::PinTask pin_from(JsonFields& f,
-                     const JsonField& p,
-                     const core::Model& m,
-                     const core::Data& data) {
+ik::LinkTask pin_from(JsonFields& f,
+                      const JsonField& p,
+                      const core::Model& m,
+                      const core::Data& data) {
   f.object(p);
   f.refuse_unknown_keys(p, {"link", "mode", "target", "rotation", "point", "gain", "weight"});
-  ik::PinTask pin;
+  ik::LinkTask pin{.role = ik::kPin};
   pin.link = link_by_name(f, p["link"], m);
   pin.mode = mode_from(f, p["mode"], ik::TaskMode::kPosition);
   if (p["point"]) pin.p_LinkPoint = f.vector3(p["point"]);
@@ -182,7 +182,7 @@ struct Request {
   ik::SolverSettings settings;
   Eigen::VectorXd q;  // frame 0
   std::vector<DragSpec> drags;
-  std::vector<ik::PinTask> pins;
+  std::vector<ik::LinkTask> pins;
   std::vector<ik::JointReferenceTask> references;
 };
 
@@ -242,8 +242,7 @@ json frame_errors(const std::vector<DragSpec>& drags,
                   const ik::Report& rep) {
   double drag_error = 0, pin_p = 0, pin_r = 0;
   for (const DragSpec& d : drags) {
-    const ik::TaskError e = ik::link_task_error(data, d.task.link, d.task.p_LinkPoint, d.task.mode,
-                                                d.task.target_W, d.task.target_R_W);
+    const ik::TaskError e = ik::link_task_error(data, d.task);
     drag_error = std::max(drag_error,
                           d.task.mode == ik::TaskMode::kOrientation ? e.orientation : e.position);
   }
@@ -274,7 +273,7 @@ json run_solve_request(const json& request) {
   core::forward_kinematics(m, data, q);
 
   ik::Problem problem;
-  for (const ik::PinTask& pin : r.pins) problem.add(pin);
+  for (const ik::LinkTask& pin : r.pins) problem.add(pin);
   for (const ik::JointReferenceTask& t : r.references) problem.add(t);
   std::vector<int> drag_ids;
   for (const DragSpec& d : r.drags) drag_ids.push_back(problem.add(d.task));

@@ -10,7 +10,8 @@
 namespace core {
 
 /// Forward dynamics a = FD(q, v, τ) = H⁻¹(τ − b), with gravity model.gravity. RBDA Table 7.1,
-/// generalized to multi-DOF joints; cross-checked against crba()/rnea() in tests/core/aba_test.cpp.
+/// generalized to multi-DOF joints; cross-checked against crba()/rnea() in
+/// tests/core/dynamics_test.cpp (Aba.InvertsRnea, Aba.EqualsInverseInertiaTimesTauMinusBias).
 /// @return data.ddq (nv)
 const Eigen::VectorXd& aba(const Model& model, Data& data, const Eigen::VectorXd& q,
                            const Eigen::VectorXd& v, const Eigen::VectorXd& tau);

@@ -9,7 +9,7 @@
 namespace core {
 
 /// Joint-space inertia H(q) with τ = H(q) a + b(q, v). RBDA §6.2; cross-checked against rnea()
-/// columns in tests/core/crba_test.cpp.
+/// columns in tests/core/dynamics_test.cpp (Crba.MatchesRneaColumns).
 /// @return data.M (nv x nv), full symmetric matrix; also fills data.X_P and data.Ic
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q);
 

@@ -9,8 +9,9 @@
 //     M(θ) θ̈ = G(θ) − H(θ, θ̇) + τ                                      (NE eq. 9)
 //
 // so τ = M θ̈ + H − G (inverse problem) and θ̈ = M⁻¹(τ − H + G) (forward problem, NE eq. 13).
-// This is O(n²) to O(n³) and meant as a cross-check of rnea()/crba() (tests/core/
-// newton_euler_test.cpp), not for the per-step path; it allocates its results.
+// A cross-check path, not a per-step one: tests/core/newton_euler_test.cpp checks it against
+// rnea(), crba() and aba(), and nothing in the per-step paths (IK, animation, simulation) calls
+// it. It is O(n²) to O(n³) and allocates its results.
 //
 // Frames follow the paper (Craig's modified DH): frame j sits on link j at joint j, joint j turns
 // about its z axis, and the transform from frame j−1 to frame j is

@@ -8,8 +8,11 @@
 
 namespace core {
 
-void handle_jacobian(const Model& model, const Data& data, const std::vector<Handle>& handles,
-                     Eigen::MatrixXd& J, FrameJacobian& scratch) {
+void handle_jacobian(const Model& model,
+                     const Data& data,
+                     const std::vector<Handle>& handles,
+                     Eigen::MatrixXd& J,
+                     FrameJacobian& scratch) {
   int m = 0;
   for (const Handle& h : handles) m += h.rows();
   if (J.rows() != m || J.cols() != model.nv) J.resize(m, model.nv);
@@ -26,8 +29,10 @@ void handle_jacobian(const Model& model, const Data& data, const std::vector<Han
   }
 }
 
-void inverse_operational_inertia(const Model& model, const Data& data,
-                                 const std::vector<Handle>& handles, OsimWorkspace& ws,
+void inverse_operational_inertia(const Model& model,
+                                 const Data& data,
+                                 const std::vector<Handle>& handles,
+                                 OsimWorkspace& ws,
                                  Eigen::MatrixXd& Phi) {
   handle_jacobian(model, data, handles, ws.J, ws.point);
   const Eigen::Index m = ws.J.rows();
@@ -57,23 +62,28 @@ int operational_inertia(const Eigen::MatrixXd& Phi, Eigen::MatrixXd& Lambda, dou
   return rank;
 }
 
-void floating_base_split(const Model& model, const Data& data, const std::vector<Handle>& handles,
-                         const Eigen::VectorXd& bias, FloatingBaseSplit& out) {
+void floating_base_split(const Model& model,
+                         const Data& data,
+                         const std::vector<Handle>& handles,
+                         const Eigen::VectorXd& bias,
+                         FloatingBaseSplit& out) {
   const int nv = model.nv;
   const int nq_joints = nv - 6;
-  Eigen::MatrixXd J;
-  FrameJacobian scratch(nv);
-  handle_jacobian(model, data, handles, J, scratch);
-  const int m = static_cast<int>(J.rows());
+  handle_jacobian(model, data, handles, out.J, out.point);  // resizes only on a new size
+  const int m = static_cast<int>(out.J.rows());
   out.H_bb = data.M.topLeftCorner<6, 6>();
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> Hbb(out.H_bb);
-  const Eigen::MatrixXd J_b = J.leftCols<6>();
-  // X = J_b H_bb⁻¹ (m x 6)
-  const Eigen::MatrixXd X = Hbb.solve(J_b.transpose()).transpose();
-  out.Gamma = J.rightCols(nq_joints) - X * data.M.topRightCorner(6, nq_joints);
-  out.Phi_lock = X * J_b.transpose();
+  out.J_b = out.J.leftCols<6>();
+  // X = J_b H_bb⁻¹ (m x 6), through Xᵀ = H_bb⁻¹ J_bᵀ
+  out.X_t = out.J_b.transpose();
+  Hbb.solveInPlace(out.X_t);
+  out.X = out.X_t.transpose();
+  // Γ = J_q − X H_bq and Φ^lock = X J_bᵀ, without Eigen's temporaries for the products
+  out.Gamma = out.J.rightCols(nq_joints);
+  out.Gamma.noalias() -= out.X * data.M.topRightCorner(6, nq_joints);
+  out.Phi_lock.noalias() = out.X * out.J_b.transpose();
   // ψ = J̇v − J_b H_bb⁻¹ b_b
-  out.psi.resize(m);
+  if (out.psi.size() != m) out.psi.resize(m);
   int row = 0;
   for (const Handle& h : handles) {
     const PointMotion jdv = point_jdot_v(model, data, h.link, h.p_LinkPoint);
@@ -84,7 +94,7 @@ void floating_base_split(const Model& model, const Data& data, const std::vector
     out.psi.segment<3>(row) = jdv.linear;
     row += 3;
   }
-  out.psi -= X * bias.head<6>();
+  out.psi.noalias() -= out.X * bias.head<6>();
 }
 
 }  // namespace core

@@ -10,16 +10,16 @@ int Problem::add(const Task& task, Priority priority) {
 }
 
 bool Problem::remove(int id) {
-  const auto it = std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.id == id; });
+  const auto it =
+      std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.id == id; });
   if (it == entries_.end()) return false;
   entries_.erase(it);
   return true;
 }
 
 bool Problem::active() const {
-  return std::any_of(entries_.begin(), entries_.end(), [](const Entry& e) {
-    return std::holds_alternative<DragTask>(e.task) || std::holds_alternative<PinTask>(e.task);
-  });
+  return std::any_of(entries_.begin(), entries_.end(),
+                     [](const Entry& e) { return std::holds_alternative<LinkTask>(e.task); });
 }
 
 }  // namespace ik

@@ -1,7 +1,10 @@
-// An IK problem: tasks by priority level. The drag goes on top and is solved exactly; pins,
-// reference angles and range rows go on the lower level, in the null space of the top
-// (Yamane ch. 8). Joint limits and spherical ranges come from the model and are added by the
-// solver while violated (ik/limits.hpp).
+// An IK problem: tasks by priority. The solver has three levels, each solved in the null space
+// of the levels above it (Yamane ch. 8):
+//   1. the drag (tasks added with kTop): solved exactly;
+//   2. joint ranges: rows the solver adds itself for joints at or beyond their ranges
+//      (ik/limits.hpp; from the model, never added here);
+//   3. pins and joint references (tasks added with kLower): solved with the SR inverse.
+// A problem holds the tasks of levels 1 and 3; Priority says which of the two a task is on.
 #pragma once
 
 #include <variant>
@@ -11,11 +14,12 @@
 
 namespace ik {
 
+/// kTop: level 1, with the drag; kLower: level 3, with the pins and references.
 enum class Priority { kTop, kLower };
 constexpr Priority kTop = Priority::kTop;
 constexpr Priority kLower = Priority::kLower;
 
-using Task = std::variant<DragTask, PinTask, JointReferenceTask>;
+using Task = std::variant<LinkTask, JointReferenceTask>;
 
 class Problem {
  public:
@@ -27,8 +31,8 @@ class Problem {
 
   /// Adds a task and returns its id (stable until removed).
   int add(const Task& task, Priority priority);
-  int add(const DragTask& t) { return add(Task(t), kTop); }
-  int add(const PinTask& t) { return add(Task(t), kLower); }
+  /// A drag goes on top (level 1), a pin on the lower level (3).
+  int add(const LinkTask& t) { return add(Task(t), t.role == kDrag ? kTop : kLower); }
   int add(const JointReferenceTask& t) { return add(Task(t), kLower); }
   bool remove(int id);
   void clear() { entries_.clear(); }
@@ -47,7 +51,7 @@ class Problem {
   /// True when a drag or a pin is present: the IK stage has something to do.
   bool active() const;
 
-  /// Whether the solver adds joint-limit and spherical-range rows (on the lower level).
+  /// Whether the solver adds joint-limit and spherical-range rows (level 2).
   bool enforce_ranges = true;
 
  private:

@@ -1,13 +1,16 @@
-// The two-level pin-and-drag IK solver (Yamane §8.2.4, digest §2.2).
+// The pin-and-drag IK solver (Yamane §8.2.4, digest §2.2), with three priority levels, each
+// solved in the null space of the levels above it:
 //
-// Top level: the drag rows J1 θ̇ = v1, solved exactly with the (joint-weighted) pseudoinverse;
-// damped only along directions where J1 loses rank (fixed root, stretched limb).
-// Range level: rows for joints at or beyond their ranges (ik/limits.hpp), solved in the null
-// space of the top. The book puts them on the lower level; above the pins, a pinned link gives
-// way before a joint leaves its range, and a weight never has to outshout the pins.
-// Lower level: pins and references J2 θ̇ = v2, solved with the SR inverse in the null space of
-// both: y = (J2 W)* (v2 − J2 θ̇0), θ̇ = θ̇0 + W y, with the projectors applied implicitly
-// (never an N×N matrix).
+// 1. The drag: rows J1 θ̇ = v1 of the tasks added with kTop, solved exactly with the
+//    joint-weighted pseudoinverse; damped only along directions where J1 loses rank (fixed
+//    root, stretched limb).
+// 2. Joint ranges: rows for joints at or beyond their ranges (ik/limits.hpp). The book puts
+//    them with the pins; on a level of their own above the pins, a pinned link gives way before
+//    a joint leaves its range, and a weight never has to outshout the pins.
+// 3. Pins and references: rows J2 θ̇ = v2 of the tasks added with kLower, solved with the SR
+//    inverse (eq. 8.7): y = (J2 W)* (v2 − J2 θ̇0), θ̇ = θ̇0 + W y (eqs. 8.14–8.16), with the
+//    projector W of levels 1 and 2 applied implicitly (never an N×N matrix).
+//
 // Joint velocities are integrated on the configuration manifold (core::integrate).
 #pragma once
 
@@ -20,6 +23,7 @@
 #include "core/model.hpp"
 #include "ik/limits.hpp"
 #include "ik/problem.hpp"
+#include "ik/solver_workspace.hpp"
 #include "ik/sr_inverse.hpp"
 
 namespace ik {
@@ -28,11 +32,11 @@ namespace ik {
 // with explicit integration the error shrinks by (1 − K h) per step, so K h ≤ 1 (digest §2.3).
 constexpr double kDefaultTimeStep = 1.0 / 60.0;
 constexpr int kDefaultIterations = 1;
-constexpr double kDefaultDamping = 3e-2;         // SR inverse k of the lower level (see docs/ik.md)
-constexpr double kResidualDampingSpeed = 1.0;    // m/s or rad/s: residual at which k reaches its
-                                                 // full value under DampingSchedule::kResidual
-constexpr double kMinimumDamping = 1e-6;         // floor of the scheduled damping
-constexpr double kDefaultTopDamping = 1e-3;      // top-level damping where J1 loses rank
+constexpr double kDefaultDamping = 3e-2;           // SR inverse k of level 3 (see docs/ik.md)
+constexpr double kResidualDampingSpeed = 1.0;      // m/s or rad/s: residual at which k reaches its
+                                                   // full value under DampingSchedule::kResidual
+constexpr double kMinimumDamping = 1e-6;           // floor of the scheduled damping
+constexpr double kDefaultTopDamping = 1e-3;        // level-1 damping where J1 loses rank
 constexpr double kDefaultTopSingularValue = 1e-2;  // singular values below this get damped
 constexpr double kDefaultManipulabilityThreshold = 1e-2;  // w0 for the scheduled damping
 constexpr double kDefaultDragGain = 40.0;
@@ -40,15 +44,16 @@ constexpr double kDefaultPinGain = 40.0;
 constexpr double kDefaultReferenceGain = 2.0;
 constexpr double kDefaultLimitGain = 20.0;
 constexpr double kDefaultRangeGain = 20.0;
-constexpr double kDefaultRangeDamping = 1e-3;    // range level SR k: bounded where it conflicts with the drag
-constexpr double kDefaultMaxPositionError = 0.1;   // m, feedback error clamp per step
+constexpr double kDefaultRangeDamping =
+    1e-3;  // level-2 SR k: bounded where it conflicts with the drag
+constexpr double kDefaultMaxPositionError = 0.1;     // m, feedback error clamp per step
 constexpr double kDefaultMaxOrientationError = 1.0;  // rad
-constexpr double kDefaultLimitMargin = 1e-3;     // rad or m inside a limit where a joint stops
-constexpr double kDefaultMaxJointStep = 0.2;     // rad or m: largest change of a coordinate per
-                                                 // iteration; larger steps are scaled down whole
+constexpr double kDefaultLimitMargin = 1e-3;         // rad or m inside a limit where a joint stops
+constexpr double kDefaultMaxJointStep = 0.2;         // rad or m: largest change of a coordinate per
+                                              // iteration; larger steps are scaled down whole
 constexpr int kMaxRangeRounds = 4;              // active-set rounds of range rows per iteration
-constexpr double kSatisfiedPosition = 1e-3;      // m: a task within this is "satisfied"
-constexpr double kSatisfiedOrientation = 1e-2;   // rad
+constexpr double kSatisfiedPosition = 1e-3;     // m: a task within this is "satisfied"
+constexpr double kSatisfiedOrientation = 1e-2;  // rad
 
 struct SolverSettings {
   double dt = kDefaultTimeStep;  // frame time; each of the iterations integrates dt / iterations
@@ -90,21 +95,21 @@ struct Report {
   Status status = Status::kOk;
   std::string message;
   std::vector<TaskReport> tasks;
-  int top_rows = 0;
-  int lower_rows = 0;
-  int top_rank = 0;          // numerical rank of the top level
-  bool top_damped = false;   // a singular direction of the top level was damped
-  int range_rows = 0;        // rows added for joints at or beyond their ranges (last iteration)
+  int top_rows = 0;         // level 1 (drag)
+  int lower_rows = 0;       // level 3 (pins and references)
+  int top_rank = 0;         // numerical rank of level 1
+  bool top_damped = false;  // a singular direction of level 1 was damped
+  int range_rows = 0;       // level-2 rows: joints at or beyond their ranges (last iteration)
   int iterations = 0;
   double max_joint_speed = 0;  // max |θ̇| over the frame (rad/s or m/s)
   bool step_limited = false;   // an iteration's step was scaled down to max_joint_step
   double limit_violation = 0;  // after the step (rad or m)
-  double lower_damping = 0;    // SR k used (last iteration)
-  // the lower-level solve of the last iteration in weight-scaled coordinates: |y| and |Δṗ|;
+  double lower_damping = 0;    // level-3 SR k used (last iteration)
+  // the level-3 solve of the last iteration in weight-scaled coordinates: |y| and |Δṗ|;
   // the SR inverse guarantees |y| <= |Δṗ| / (2√k) (Yamane §8.2.3)
   double lower_solution_norm = 0;
   double lower_rhs_norm = 0;
-  double microseconds = 0;     // wall time of the step
+  double microseconds = 0;  // wall time of the step
 };
 
 class Solver {
@@ -115,52 +120,38 @@ class Solver {
   /// dt / iterations each. q is updated in place; data holds the final kinematics.
   /// A problem with a bad link or joint index, or a non-finite target or gain, is rejected:
   /// report().status is kRejected with a message naming the task, and q is not touched.
-  /// Allocation-free once the workspace has seen a problem of this size.
+  /// Allocation-free once the workspace has seen a problem with as many rows on levels 1 and 3
+  /// (ik/solver_workspace.hpp).
   const Report& step(const Problem& problem, core::Data& data, Eigen::VectorXd& q);
 
   const SolverSettings& settings() const { return settings_; }
   void set_settings(const SolverSettings& s) { settings_ = s; }
   const Report& report() const { return report_; }
   /// Joint velocity of the last iteration (nv).
-  const Eigen::VectorXd& velocity() const { return qdot_; }
+  const Eigen::VectorXd& velocity() const { return ws_.joint_velocity; }
 
  private:
   /// Empty when every task is usable, else a message naming the first bad one.
   std::string check_problem(const Problem& problem, const Eigen::VectorXd& q) const;
   void fill_rows(const Problem& problem, const core::Data& data, const Eigen::VectorXd& q);
-  void append_range_rows(size_t first);  // range_rows_[first..] into the range level
+  void append_range_rows(size_t first);  // range_blocks[first..] into level 2
+  // the three levels into ws_.x and ws_.joint_velocity; later rounds of one iteration only add
+  // range rows, so they reuse level 1 and the factorization of level 3 (ik/solver_levels.cpp)
   void solve_levels(bool first_round);
+  void solve_drag_level();
+  void invert_damped_drag_gram(const Eigen::Ref<const Eigen::MatrixXd>& G);
+  void solve_range_level();
+  void solve_pin_level(bool first_round);
+  void factorize_pin_level();
+  double pin_damping();
+  void solve_pin_normal_equations();
   void limit_step(double h);
   void fill_report(const Problem& problem, const core::Data& data, const Eigen::VectorXd& q);
 
   const core::Model& model_;
   SolverSettings settings_;
   Report report_;
-  // rows: top (J1, v1) and lower (J2, v2, row scale √weight); joint scale 1/√w
-  Eigen::MatrixXd J1_, J2_;
-  Eigen::VectorXd v1_, v2_, row_scale2_, col_scale_;
-  int m1_ = 0, m2_ = 0;
-  // top-level factors
-  Eigen::MatrixXd J1s_, J2s_;  // rows and columns scaled by the weights
-  Eigen::MatrixXd G_, E_, Ginv_;  // top level: Cholesky factor of G, or the damped inverse
-  bool top_is_cholesky_ = true;
-  Eigen::VectorXd w_;
-  // range level: selected coordinate and desired velocity per row, projected rows and factors
-  int mR_ = 0;
-  std::vector<int> range_coord_;
-  Eigen::VectorXd vR_;
-  Eigen::MatrixXd SR_, PR_, GR_;
-  Eigen::VectorXd t_, dp_, y_, qdot_, scaled_;
-  Eigen::VectorXd x_top_, x_range_, x_lower_;  // each level's contribution, weight-scaled
-  // lower level through its normal equations (tree-sparse) and the constraint Schur complement
-  std::vector<std::vector<int>> link_support_;  // coordinates on each link's root path
-  std::vector<int> row_support_;  // per lower row: link (>= 0) or −1 − coordinate
-  Eigen::MatrixXd A_, Y_, Sc_, pivots_;
-  Eigen::VectorXd b_, ltdl_half_rhs_;
-  int y_columns_ = 0;  // columns of Y valid for the current factorization
-  core::FrameJacobian point_;
-  std::vector<RangeRow> range_rows_;
-  std::vector<char> range_flags_;
+  Workspace ws_;
 };
 
 }  // namespace ik

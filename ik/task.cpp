@@ -10,12 +10,17 @@ using core::JointType;
 
 const char* to_string(TaskMode m) {
   switch (m) {
-    case TaskMode::kPosition: return "position";
-    case TaskMode::kOrientation: return "orientation";
-    case TaskMode::kPose: return "pose";
+    case TaskMode::kPosition:
+      return "position";
+    case TaskMode::kOrientation:
+      return "orientation";
+    case TaskMode::kPose:
+      return "pose";
   }
   return "?";
 }
+
+const char* to_string(LinkRole r) { return r == LinkRole::kDrag ? "drag" : "pin"; }
 
 namespace {
 int mode_rows(TaskMode m) { return m == TaskMode::kPose ? 6 : 3; }
@@ -30,38 +35,43 @@ V clamped(const V& e, double max_norm) {
 }
 }  // namespace
 
-int task_rows(const core::Model&, const DragTask& t) { return mode_rows(t.mode); }
-int task_rows(const core::Model&, const PinTask& t) { return mode_rows(t.mode); }
+int task_rows(const core::Model&, const LinkTask& t) { return mode_rows(t.mode); }
 int task_rows(const core::Model& model, const JointReferenceTask& t) {
   return core::joint_nv(model.joint_type[t.joint]);
 }
 
-void fill_link_task(const core::Model& model, const core::Data& data, int link,
-                    const Vector3& p_LinkPoint, TaskMode mode, const Vector3& target_W,
-                    const Quaternion& target_R_W, const Vector3& velocity_W,
-                    const Vector3& angular_velocity_W, double K, const ErrorClamp& clamp,
-                    core::FrameJacobian& scratch, Eigen::Ref<Eigen::MatrixXd> J,
+void fill_link_task(const core::Model& model,
+                    const core::Data& data,
+                    const LinkTask& t,
+                    double K,
+                    const ErrorClamp& clamp,
+                    core::FrameJacobian& scratch,
+                    Eigen::Ref<Eigen::MatrixXd> J,
                     Eigen::Ref<Eigen::VectorXd> v) {
-  core::point_jacobian(model, data, link, p_LinkPoint, scratch);
+  core::point_jacobian(model, data, t.link, t.p_LinkPoint, scratch);
   int row = 0;
-  if (has_orientation(mode)) {
+  if (has_orientation(t.mode)) {
     // ω_d = ω_ref + K log(R_target R_currentᵀ): the world rotation vector to the target
-    const Quaternion R_now(data.X_W[link].R);
+    const Quaternion R_now(data.X_W[t.link].R);
     J.middleRows<3>(row) = scratch.angular;
-    const Vector3 e = core::quaternion_log(target_R_W * R_now.conjugate());
-    v.segment<3>(row) = angular_velocity_W + K * clamped(e, clamp.orientation);
+    const Vector3 e = core::quaternion_log(t.target_R_W * R_now.conjugate());
+    v.segment<3>(row) = t.angular_velocity_W + K * clamped(e, clamp.orientation);
     row += 3;
   }
-  if (has_position(mode)) {
-    const Vector3 p_W = data.X_W[link] * p_LinkPoint;
+  if (has_position(t.mode)) {
+    const Vector3 p_W = data.X_W[t.link] * t.p_LinkPoint;
     J.middleRows<3>(row) = scratch.linear;
-    v.segment<3>(row) = velocity_W + K * clamped(Vector3(target_W - p_W), clamp.position);
+    v.segment<3>(row) = t.velocity_W + K * clamped(Vector3(t.target_W - p_W), clamp.position);
   }
 }
 
-void fill_reference_task(const core::Model& model, const Eigen::VectorXd& q,
-                         const JointReferenceTask& t, double K, const ErrorClamp& clamp,
-                         Eigen::Ref<Eigen::MatrixXd> J, Eigen::Ref<Eigen::VectorXd> v) {
+void fill_reference_task(const core::Model& model,
+                         const Eigen::VectorXd& q,
+                         const JointReferenceTask& t,
+                         double K,
+                         const ErrorClamp& clamp,
+                         Eigen::Ref<Eigen::MatrixXd> J,
+                         Eigen::Ref<Eigen::VectorXd> v) {
   const int iv = model.idx_v[t.joint];
   const int iq = model.idx_q[t.joint];
   const int n = core::joint_nv(model.joint_type[t.joint]);
@@ -77,17 +87,17 @@ void fill_reference_task(const core::Model& model, const Eigen::VectorXd& q,
   }
 }
 
-TaskError link_task_error(const core::Data& data, int link, const Vector3& p_LinkPoint,
-                          TaskMode mode, const Vector3& target_W, const Quaternion& target_R_W) {
+TaskError link_task_error(const core::Data& data, const LinkTask& t) {
   TaskError e;
-  if (has_position(mode)) e.position = (target_W - data.X_W[link] * p_LinkPoint).norm();
-  if (has_orientation(mode)) {
-    e.orientation = target_R_W.angularDistance(Quaternion(data.X_W[link].R));
+  if (has_position(t.mode)) e.position = (t.target_W - data.X_W[t.link] * t.p_LinkPoint).norm();
+  if (has_orientation(t.mode)) {
+    e.orientation = t.target_R_W.angularDistance(Quaternion(data.X_W[t.link].R));
   }
   return e;
 }
 
-TaskError reference_task_error(const core::Model& model, const Eigen::VectorXd& q,
+TaskError reference_task_error(const core::Model& model,
+                               const Eigen::VectorXd& q,
                                const JointReferenceTask& t) {
   TaskError e;
   const int iq = model.idx_q[t.joint];

@@ -21,32 +21,29 @@ const char* to_string(TaskMode m);
 /// "use the solver's default" for a gain
 constexpr double kDefaultGain = -1.0;
 
-/// Drag a point on a link to a world target (top priority by default). Several drags are
-/// allowed (markers as drags, Yamane ch. 10). Feedback law: ṙ = ṙ_ref + K (r_ref − r) (eq. 8.8).
-struct DragTask {
+/// What a link task is for: a drag (the pointer; level 1 by default, Yamane eq. 8.8) or a pin
+/// (hold a point; level 3 by default, eqs. 8.21 and 8.30). The role picks the default priority,
+/// the default gain and the name in the report; the rows are the same.
+enum class LinkRole { kDrag, kPin };
+constexpr LinkRole kDrag = LinkRole::kDrag;
+constexpr LinkRole kPin = LinkRole::kPin;
+const char* to_string(LinkRole r);  // "drag", "pin"
+
+/// Move a point on a link to a world target: position, orientation or both. Feedback law
+/// ṙ = ṙ_ref + K (r_ref − r) (eq. 8.8), ω = ω_ref + K log(R_ref Rᵀ). A drag follows the pointer;
+/// several are allowed (markers as drags, Yamane ch. 10). A pin holds its point, static (eq. 8.21)
+/// or moving with feed-forward velocity (eq. 8.30, editing in motion); any link, any number.
+struct LinkTask {
+  LinkRole role = kDrag;
   int link = 0;
-  Vector3 p_LinkPoint = Vector3::Zero();  // the grabbed point, link frame
+  Vector3 p_LinkPoint = Vector3::Zero();  // the grabbed or pinned point, link frame
   Vector3 target_W = Vector3::Zero();
   Quaternion target_R_W = Quaternion::Identity();  // orientation target (link frame in world)
   Vector3 velocity_W = Vector3::Zero();            // feed-forward ṙ_ref
   Vector3 angular_velocity_W = Vector3::Zero();    // feed-forward ω_ref
   TaskMode mode = TaskMode::kPosition;
   double gain = kDefaultGain;
-  double weight = 1.0;
-};
-
-/// Hold a point on a link at a target: static (eq. 8.21) or moving with feed-forward velocity
-/// (eq. 8.30, editing in motion). Any link and any number of pins.
-struct PinTask {
-  int link = 0;
-  Vector3 p_LinkPoint = Vector3::Zero();
-  Vector3 target_W = Vector3::Zero();
-  Quaternion target_R_W = Quaternion::Identity();
-  Vector3 velocity_W = Vector3::Zero();
-  Vector3 angular_velocity_W = Vector3::Zero();
-  TaskMode mode = TaskMode::kPosition;
-  double gain = kDefaultGain;
-  double weight = 1.0;
+  double weight = 1.0;  // row weight on the level it sits on (level 1 ignores it: it is exact)
 };
 
 /// Pull a joint toward a reference: 1-DOF θ̇ = θ̇_ref + K (θ_ref − θ) (eqs. 8.22, 8.31);
@@ -54,17 +51,16 @@ struct PinTask {
 /// vector in place of the skew part, so a 180° error still pulls).
 struct JointReferenceTask {
   int joint = 0;
-  double q_ref = 0;                            // 1-DOF joints
-  Quaternion R_ref = Quaternion::Identity();   // spherical joints
-  double velocity_ref = 0;                     // 1-DOF feed-forward
+  double q_ref = 0;                                // 1-DOF joints
+  Quaternion R_ref = Quaternion::Identity();       // spherical joints
+  double velocity_ref = 0;                         // 1-DOF feed-forward
   Vector3 angular_velocity_ref = Vector3::Zero();  // spherical feed-forward, child frame
   double gain = kDefaultGain;
   double weight = 0.1;  // references are preferences: weaker than pins (1) by default
 };
 
 /// Number of rows a task contributes.
-int task_rows(const core::Model& model, const DragTask& t);
-int task_rows(const core::Model& model, const PinTask& t);
+int task_rows(const core::Model& model, const LinkTask& t);
 int task_rows(const core::Model& model, const JointReferenceTask& t);
 
 /// Task error: position (m) and orientation (rad) parts, whichever the mode has.
@@ -82,21 +78,27 @@ struct ErrorClamp {
 /// Fills the rows of J (task Jacobian, world-aligned; orientation rows before position rows)
 /// and v (desired velocity) for the current kinematics, with the feedback gain K.
 /// Requires: core::compute_joint_jacobians(model, data, q).
-void fill_link_task(const core::Model& model, const core::Data& data, int link,
-                    const Vector3& p_LinkPoint, TaskMode mode, const Vector3& target_W,
-                    const Quaternion& target_R_W, const Vector3& velocity_W,
-                    const Vector3& angular_velocity_W, double K, const ErrorClamp& clamp,
-                    core::FrameJacobian& scratch, Eigen::Ref<Eigen::MatrixXd> J,
+void fill_link_task(const core::Model& model,
+                    const core::Data& data,
+                    const LinkTask& t,
+                    double K,
+                    const ErrorClamp& clamp,
+                    core::FrameJacobian& scratch,
+                    Eigen::Ref<Eigen::MatrixXd> J,
                     Eigen::Ref<Eigen::VectorXd> v);
 
-void fill_reference_task(const core::Model& model, const Eigen::VectorXd& q,
-                         const JointReferenceTask& t, double K, const ErrorClamp& clamp,
-                         Eigen::Ref<Eigen::MatrixXd> J, Eigen::Ref<Eigen::VectorXd> v);
+void fill_reference_task(const core::Model& model,
+                         const Eigen::VectorXd& q,
+                         const JointReferenceTask& t,
+                         double K,
+                         const ErrorClamp& clamp,
+                         Eigen::Ref<Eigen::MatrixXd> J,
+                         Eigen::Ref<Eigen::VectorXd> v);
 
 /// Current error of a link task. Requires: core::forward_kinematics.
-TaskError link_task_error(const core::Data& data, int link, const Vector3& p_LinkPoint,
-                          TaskMode mode, const Vector3& target_W, const Quaternion& target_R_W);
-TaskError reference_task_error(const core::Model& model, const Eigen::VectorXd& q,
+TaskError link_task_error(const core::Data& data, const LinkTask& t);
+TaskError reference_task_error(const core::Model& model,
+                               const Eigen::VectorXd& q,
                                const JointReferenceTask& t);
 
 /// The mode named by to_string ("position", "orientation", "pose"); nullopt for other text.

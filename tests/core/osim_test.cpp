@@ -109,8 +109,33 @@ TEST(Osim, FloatingBaseSplitIdentity) {
     row += 3;
   }
   const Eigen::VectorXd rdd = J * a + jdot_v;
-  const Eigen::VectorXd predicted = split.Gamma * a.tail(m->nv - 6) + split.Phi_lock * f + split.psi;
+  const Eigen::VectorXd predicted =
+      split.Gamma * a.tail(m->nv - 6) + split.Phi_lock * f + split.psi;
   EXPECT_LT((rdd - predicted).norm(), 1e-9 * (1 + rdd.norm()));
+}
+
+TEST(Osim, FloatingBaseSplitDoesNotAllocateOnceSized) {
+  const auto m = fixtures::branching_tree();
+  Data d(*m);
+  const auto handles = tree_handles(*m);
+  const Eigen::VectorXd q = random_configuration(*m, 3);
+  const Eigen::VectorXd v = difference(*m, q, random_configuration(*m, 4));
+  forward_kinematics(*m, d, q, v);
+  compute_joint_jacobians(*m, d);
+  const Eigen::VectorXd b = bias_forces(*m, d, q, v);
+  crba(*m, d, q);
+  FloatingBaseSplit split;
+  floating_base_split(*m, d, handles, b, split);  // warm-up: sizes the split and its scratch
+  const FloatingBaseSplit first = split;
+  fixtures::AllocationCounter allocations;
+  Eigen::internal::set_is_malloc_allowed(false);  // Eigen allocates with malloc, not new
+  floating_base_split(*m, d, handles, b, split);
+  Eigen::internal::set_is_malloc_allowed(true);
+  EXPECT_EQ(allocations.count(), 0);
+  // reusing the scratch changes nothing
+  EXPECT_EQ(split.Gamma, first.Gamma);
+  EXPECT_EQ(split.Phi_lock, first.Phi_lock);
+  EXPECT_EQ(split.psi, first.psi);
 }
 
 }  // namespace

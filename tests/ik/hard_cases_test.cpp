@@ -43,8 +43,12 @@ struct Rig {
     return Quaternion(data.X_W[link(name)].R);
   }
   int pin(const char* name, TaskMode mode = TaskMode::kPose, const Vector3& point = Vector3::Zero()) {
-    return problem.add(PinTask{.link = link(name), .p_LinkPoint = point, .target_W = p(name, point),
-                               .target_R_W = R(name), .mode = mode});
+    return problem.add(LinkTask{.role = kPin,
+                                .link = link(name),
+                                .p_LinkPoint = point,
+                                .target_W = p(name, point),
+                                .target_R_W = R(name),
+                                .mode = mode});
   }
   // one frame, with the checks every hard case shares
   const Report& step() {
@@ -104,7 +108,8 @@ TEST(HardCases, StretchedLimbSingularityStaysBoundedAndRecovers) {
     rig.pin("pelvis");
     // pin the hand 1 m beyond its reach: the arm straightens and its Jacobian loses rank
     const Vector3 reach = rig.p("r_hand") + Vector3(-1.0, 0.3, 0.0);
-    const int hand = rig.problem.add(PinTask{.link = rig.link("r_hand"), .target_W = reach});
+    const int hand =
+        rig.problem.add(LinkTask{.role = kPin, .link = rig.link("r_hand"), .target_W = reach});
     rig.run(120);
     // unreachable: the body leans toward it, the error stays, bounded, and the arm is straight
     EXPECT_GT(rig.pin_error(hand), 0.05);
@@ -113,7 +118,7 @@ TEST(HardCases, StretchedLimbSingularityStaysBoundedAndRecovers) {
     EXPECT_LT(std::abs(elbow), 0.15) << "the elbow should be (nearly) straight";
     EXPECT_LT(rig.solver.report().max_joint_speed, 50.0);
     // bring the target back within reach: the error recovers through the feedback
-    rig.problem.get<PinTask>(hand)->target_W = rig.p("chest") + Vector3(-0.35, 0.0, 0.3);
+    rig.problem.get<LinkTask>(hand)->target_W = rig.p("chest") + Vector3(-0.35, 0.0, 0.3);
     rig.run(120);
     EXPECT_LT(rig.pin_error(hand), 1e-3);
     return rig.q;
@@ -129,7 +134,7 @@ TEST(HardCases, TopLevelSingularityWithFixedRootIsDamped) {
     const char* tip_name = rig.model->link_name[tip].c_str();
     const Vector3 base = rig.p(rig.model->link_name[1].c_str());
     const Vector3 far = base + (rig.p(tip_name) - base).normalized() * 5.0;  // far beyond reach
-    const int drag = rig.problem.add(DragTask{.link = tip, .target_W = far});
+    const int drag = rig.problem.add(LinkTask{.role = kDrag, .link = tip, .target_W = far});
     bool damped = false;
     for (int f = 0; f < 120; ++f) {
       const Report& r = rig.step();
@@ -140,7 +145,7 @@ TEST(HardCases, TopLevelSingularityWithFixedRootIsDamped) {
     const double stretched = rig.task_position_error(drag);
     EXPECT_GT(stretched, 3.0);
     // a reachable target again: the drag converges
-    rig.problem.get<DragTask>(drag)->target_W = base + Vector3(0.25, 0.35, 0.2);
+    rig.problem.get<LinkTask>(drag)->target_W = base + Vector3(0.25, 0.35, 0.2);
     rig.run(240);
     EXPECT_LT(rig.task_position_error(drag), 1e-3);
     return rig.q;
@@ -156,7 +161,8 @@ TEST(HardCases, DragBeyondReachKeepsTheDragExactAndPinsRecoverOnRelease) {
     const int lf = rig.pin("l_foot");
     const int rf = rig.pin("r_foot");
     const Vector3 far = rig.p("r_hand") + Vector3(-1.5, 0.8, 1.2);
-    const int drag = rig.problem.add(DragTask{.link = rig.link("r_hand"), .target_W = far});
+    const int drag =
+        rig.problem.add(LinkTask{.role = kDrag, .link = rig.link("r_hand"), .target_W = far});
     // 120 frames: the pins stop giving way by frame ~110; while the body still moves, the exact
     // velocity-level drag trails by the step's second-order integration error (~1e-6 m)
     rig.run(120);
@@ -195,7 +201,10 @@ TEST(HardCases, ManyPinsOverConstrainTheLowerLevelGracefully) {
     for (int j = 2; j < rig.model->njoints; ++j) {
       if (core::joint_nv(rig.model->joint_type[j]) == 3) rig.problem.add(JointReferenceTask{.joint = j});
     }
-    const int drag = rig.problem.add(DragTask{.link = rig.link("r_hand"), .target_W = rig.p("r_hand") + Vector3(-0.2, 0.3, 0.3)});
+    const int drag =
+        rig.problem.add(LinkTask{.role = kDrag,
+                                 .link = rig.link("r_hand"),
+                                 .target_W = rig.p("r_hand") + Vector3(-0.2, 0.3, 0.3)});
     for (int f = 0; f < 90; ++f) {
       const Report& r = rig.step();
       EXPECT_GT(r.lower_rows, rig.model->nv);  // over-constrained
@@ -241,7 +250,10 @@ TEST(HardCases, JointsDrivenOutOfRangeRecoverWithoutChatter) {
   // the joint returns once the drag lets go
   Rig arm(io::load_character("arm7").model);
   const int tip = arm.model->njoints - 1;
-  const int drag = arm.problem.add(DragTask{.link = tip, .target_W = arm.p(arm.model->link_name[1].c_str()) + Vector3(0, 0.05, 0)});
+  const int drag = arm.problem.add(
+      LinkTask{.role = kDrag,
+               .link = tip,
+               .target_W = arm.p(arm.model->link_name[1].c_str()) + Vector3(0, 0.05, 0)});
   double worst = 0;
   for (int f = 0; f < 120; ++f) worst = std::max(worst, arm.step().limit_violation);
   arm.problem.remove(drag);
@@ -310,7 +322,10 @@ TEST(HardCases, OrientationErrorOf180DegreesStillPulls) {
     rig.pin("pelvis");
     rig.pin("chest");
     const Quaternion flipped = Quaternion(Eigen::AngleAxisd(kPi, Vector3::UnitY())) * rig.R("r_hand");
-    const int pin = rig.problem.add(PinTask{.link = rig.link("r_hand"), .target_R_W = flipped, .mode = TaskMode::kOrientation});
+    const int pin = rig.problem.add(LinkTask{.role = kPin,
+                                             .link = rig.link("r_hand"),
+                                             .target_R_W = flipped,
+                                             .mode = TaskMode::kOrientation});
     rig.step();
     const double first = rig.pin_error(pin);
     rig.run(60);
@@ -348,7 +363,8 @@ TEST(HardCases, NoEulerAngleGimbalLock) {
     rig.problem.clear();
     rig.pin("pelvis");
     rig.pin("chest");
-    const int drag = rig.problem.add(DragTask{.link = sh, .target_R_W = target, .mode = TaskMode::kOrientation});
+    const int drag = rig.problem.add(
+        LinkTask{.role = kDrag, .link = sh, .target_R_W = target, .mode = TaskMode::kOrientation});
     rig.run(60);
     const double err = [&] {
       for (const TaskReport& t : rig.solver.report().tasks) {
@@ -364,15 +380,20 @@ TEST(HardCases, NoEulerAngleGimbalLock) {
 TEST(HardCases, UnreachableAndMissingMarkerTargets) {
   auto scenario = [] {
     Rig rig(human48());
-    const int a = rig.problem.add(DragTask{.link = rig.link("l_hand"), .target_W = rig.p("l_hand") + Vector3(0.1, 0.1, 0.1)});
-    const int b = rig.problem.add(DragTask{.link = rig.link("r_hand"), .target_W = rig.p("r_hand") + Vector3(-3, 0, 0)});
-    const int c = rig.problem.add(PinTask{.link = rig.link("head"), .target_W = rig.p("head") + Vector3(0, 0, 2.5)});
+    const int a = rig.problem.add(LinkTask{.role = kDrag,
+                                           .link = rig.link("l_hand"),
+                                           .target_W = rig.p("l_hand") + Vector3(0.1, 0.1, 0.1)});
+    const int b = rig.problem.add(LinkTask{.role = kDrag,
+                                           .link = rig.link("r_hand"),
+                                           .target_W = rig.p("r_hand") + Vector3(-3, 0, 0)});
+    const int c = rig.problem.add(LinkTask{
+        .role = kPin, .link = rig.link("head"), .target_W = rig.p("head") + Vector3(0, 0, 2.5)});
     rig.run(120);
     for (int id : {a, b, c}) EXPECT_TRUE(std::isfinite(rig.task_position_error(id)));
     EXPECT_LT(rig.solver.report().max_joint_speed, 100.0);
     // a missing marker (NaN) is refused and the pose stays exactly as it was
     const Eigen::VectorXd before = rig.q;
-    rig.problem.get<DragTask>(a)->target_W.x() = NAN;
+    rig.problem.get<LinkTask>(a)->target_W.x() = NAN;
     const Report& r = rig.solver.step(rig.problem, rig.data, rig.q);
     EXPECT_EQ(r.status, Report::Status::kRejected);
     EXPECT_NE(r.message.find("target is not finite"), std::string::npos) << r.message;
@@ -395,10 +416,11 @@ TEST(HardCases, SquatFromTheRestPoseBendsTheKneesAndKeepsTheFeet) {
     const int lf = rig.pin("l_foot");
     const int rf = rig.pin("r_foot");
     const Vector3 start = rig.p("pelvis");
-    const int drag = rig.problem.add(DragTask{.link = rig.link("pelvis"), .target_W = start});
+    const int drag =
+        rig.problem.add(LinkTask{.role = kDrag, .link = rig.link("pelvis"), .target_W = start});
     const double knee0 = rig.q[rig.model->idx_q[rig.link("l_shank")]];
     for (int f = 1; f <= 60; ++f) {  // 12 cm down over one second
-      rig.problem.get<DragTask>(drag)->target_W = start - Vector3(0, 0.12 * f / 60.0, 0);
+      rig.problem.get<LinkTask>(drag)->target_W = start - Vector3(0, 0.12 * f / 60.0, 0);
       rig.step();
     }
     rig.run(60);
