@@ -23,7 +23,10 @@ bool EditLayer::operator==(const EditLayer& o) const {
          falloff == o.falloff && weight == o.weight && muted == o.muted;
 }
 
-void layered_frame(const core::Model& model, const core::Clip& base, const LayerStack& layers, int f,
+void layered_frame(const core::Model& model,
+                   const core::Clip& base,
+                   const LayerStack& layers,
+                   int f,
                    Eigen::VectorXd& q_out) {
   q_out = base.frames[std::clamp(f, 0, base.size() - 1)];
   for (const auto& layer : layers) {
@@ -34,8 +37,11 @@ void layered_frame(const core::Model& model, const core::Clip& base, const Layer
   }
 }
 
-void sample_layered(const core::Model& model, const core::Clip& base, const LayerStack& layers,
-                    double t, Eigen::VectorXd& q_out) {
+void sample_layered(const core::Model& model,
+                    const core::Clip& base,
+                    const LayerStack& layers,
+                    double t,
+                    Eigen::VectorXd& q_out) {
   if (base.empty()) {
     q_out = core::neutral_configuration(model);
     return;

@@ -31,12 +31,18 @@ struct EditLayer {
 using LayerStack = std::vector<std::shared_ptr<const EditLayer>>;
 
 /// Frame f of the clip with the unmuted layers applied in order.
-void layered_frame(const core::Model& model, const core::Clip& base, const LayerStack& layers, int f,
+void layered_frame(const core::Model& model,
+                   const core::Clip& base,
+                   const LayerStack& layers,
+                   int f,
                    Eigen::VectorXd& q_out);
 
 /// The layered motion at time t (interpolated between layered frames).
-void sample_layered(const core::Model& model, const core::Clip& base, const LayerStack& layers,
-                    double t, Eigen::VectorXd& q_out);
+void sample_layered(const core::Model& model,
+                    const core::Clip& base,
+                    const LayerStack& layers,
+                    double t,
+                    Eigen::VectorXd& q_out);
 
 /// The clip with every unmuted layer applied (what "bake" keeps).
 core::Clip bake(const core::Model& model, const core::Clip& base, const LayerStack& layers);

@@ -5,7 +5,10 @@
 namespace animator {
 
 DocumentChange::DocumentChange(Document before, Document after, std::string label, int gesture)
-    : before_(std::move(before)), after_(std::move(after)), label_(std::move(label)), gesture_(gesture) {}
+    : before_(std::move(before)),
+      after_(std::move(after)),
+      label_(std::move(label)),
+      gesture_(gesture) {}
 
 void DocumentChange::apply(Session& s) { s.apply_document(after_); }
 void DocumentChange::revert(Session& s) { s.apply_document(before_); }

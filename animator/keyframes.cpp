@@ -13,9 +13,12 @@ using core::Quaternion;
 
 const char* to_string(Interpolation i) {
   switch (i) {
-    case Interpolation::kStep: return "step";
-    case Interpolation::kLinear: return "linear";
-    case Interpolation::kSmooth: return "smooth";
+    case Interpolation::kStep:
+      return "step";
+    case Interpolation::kLinear:
+      return "linear";
+    case Interpolation::kSmooth:
+      return "smooth";
   }
   return "?";
 }
@@ -64,12 +67,20 @@ int KeyTrack::find(double time, double tolerance) const {
 namespace {
 
 // cubic Hermite between p1 and p2 with Catmull–Rom tangents from p0 and p3 (times t0..t3)
-double hermite(double p0, double p1, double p2, double p3, double t0, double t1, double t2, double t3,
+double hermite(double p0,
+               double p1,
+               double p2,
+               double p3,
+               double t0,
+               double t1,
+               double t2,
+               double t3,
                double s) {
   const double m1 = t2 > t0 ? (p2 - p0) / (t2 - t0) * (t2 - t1) : p2 - p1;
   const double m2 = t3 > t1 ? (p3 - p1) / (t3 - t1) * (t2 - t1) : p2 - p1;
   const double s2 = s * s, s3 = s2 * s;
-  return (2 * s3 - 3 * s2 + 1) * p1 + (s3 - 2 * s2 + s) * m1 + (-2 * s3 + 3 * s2) * p2 + (s3 - s2) * m2;
+  return (2 * s3 - 3 * s2 + 1) * p1 + (s3 - 2 * s2 + s) * m1 + (-2 * s3 + 3 * s2) * p2 +
+         (s3 - s2) * m2;
 }
 
 Quaternion same_hemisphere(const Quaternion& ref, Quaternion q) {
@@ -138,10 +149,15 @@ void KeyTrack::sample(const core::Model& model, double t, Eigen::VectorXd& q_out
       core::set_quaternion_at(q_out, c, r.normalized());
     };
     switch (model.joint_type[j]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute:
-      case JointType::kPrismatic: scalar(iq); break;
-      case JointType::kSpherical: rotation(iq); break;
+      case JointType::kPrismatic:
+        scalar(iq);
+        break;
+      case JointType::kSpherical:
+        rotation(iq);
+        break;
       case JointType::kFree:
         for (int c = 0; c < 3; ++c) scalar(iq + c);
         rotation(iq + 3);

@@ -4,8 +4,8 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <string_view>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "core/model.hpp"
@@ -18,7 +18,7 @@ std::optional<Interpolation> interpolation_from_string(std::string_view s);
 
 struct Keyframe {
   double time = 0;
-  Eigen::VectorXd q;  // nq
+  Eigen::VectorXd q;                                     // nq
   Interpolation interpolation = Interpolation::kSmooth;  // how to leave this key toward the next
   bool operator==(const Keyframe& o) const {
     return time == o.time && q == o.q && interpolation == o.interpolation;

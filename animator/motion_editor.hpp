@@ -1,6 +1,7 @@
 // Editing in motion (Yamane §8.4, digest §2.6): the pin-and-drag solver run at every frame of a
 // clip. Pins become moving pins that follow the clip's link trajectories (eq. 8.30), every joint
-// follows the clip's angles as a weak moving reference (eq. 8.31), and a drag pulls on top. The result is kept as an edit layer over the untouched clip.
+// follows the clip's angles as a weak moving reference (eq. 8.31), and a drag pulls on top. The
+// result is kept as an edit layer over the untouched clip.
 #pragma once
 
 #include <Eigen/Core>

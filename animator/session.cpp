@@ -73,7 +73,9 @@ void Session::set_pose(const Eigen::VectorXd& q) {
 
 // --- dragging ----------------------------------------------------------------------------------
 
-void Session::drag_begin(int link, const core::Vector3& target_W, const core::Vector3& p_LinkPoint) {
+void Session::drag_begin(int link,
+                         const core::Vector3& target_W,
+                         const core::Vector3& p_LinkPoint) {
   check_link(link);
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
@@ -84,7 +86,8 @@ void Session::drag_begin(int link, const core::Vector3& target_W, const core::Ve
   settling_ = true;
 }
 
-void Session::drag_move(const core::Vector3& target_W, const std::optional<core::Quaternion>& rotation) {
+void Session::drag_move(const core::Vector3& target_W,
+                        const std::optional<core::Quaternion>& rotation) {
   if (!drag_) throw SessionError("no drag in progress (drag_begin first)");
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
@@ -131,14 +134,16 @@ void Session::unpin(int link) {
   commit(before, "unpin " + model_->link_name[link]);
 }
 
-void Session::move_pin(int link, const core::Vector3& target_W,
+void Session::move_pin(int link,
+                       const core::Vector3& target_W,
                        const std::optional<core::Quaternion>& rotation) {
   check_link(link);
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (rotation && (!rotation->coeffs().allFinite() || std::abs(rotation->norm() - 1) > 1e-3)) {
     throw SessionError("rotation", "must be a unit quaternion [w, x, y, z]");
   }
-  const auto it = std::find_if(doc_.pins.begin(), doc_.pins.end(), [&](const Pin& p) { return p.link == link; });
+  const auto it = std::find_if(doc_.pins.begin(), doc_.pins.end(),
+                               [&](const Pin& p) { return p.link == link; });
   if (it == doc_.pins.end()) {
     throw SessionError("link", "link '" + model_->link_name[link] + "' is not pinned");
   }
@@ -149,8 +154,8 @@ void Session::move_pin(int link, const core::Vector3& target_W,
   // consecutive moves of one pin are one gesture, one undo entry
   // consecutive moves of one pin share an id and merge
   if (last_gesture_ != kMovePinGesture + link) last_gesture_ = kMovePinGesture + link;
-  history_.record(std::make_unique<DocumentChange>(before, doc_, "move pin " + model_->link_name[link],
-                                                   last_gesture_));
+  history_.record(std::make_unique<DocumentChange>(
+      before, doc_, "move pin " + model_->link_name[link], last_gesture_));
   settling_ = true;
 }
 
@@ -375,8 +380,9 @@ void Session::show_animation_at(double t) {
 void Session::start_motion_edit() {
   ik::SolverSettings s = motion_edit_settings(doc_.clip->frame_time);
   motion_editor_.emplace(*model_, s);
-  motion_edit_frame_ = std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
-                                  doc_.clip->size() - 1);
+  motion_edit_frame_ =
+      std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
+                 doc_.clip->size() - 1);
   motion_editor_->begin(*doc_.clip, doc_.layers, motion_edit_frame_);
 }
 
@@ -389,7 +395,8 @@ void Session::finish_motion_edit() {
   show_animation_at(playback_.time);
 }
 
-// --- time ------------------------------------------------------------------------------------------
+// --- time
+// ------------------------------------------------------------------------------------------
 
 bool Session::needs_tick() const { return playback_.playing || drag_.has_value() || settling_; }
 
@@ -439,9 +446,11 @@ Session::TickResult Session::tick(double dt) {
   if (playback_.playing && length > 0) {
     double t = playback_.time + dt * playback_.speed;
     const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
-    const double end = playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
+    const double end =
+        playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
     if (playback_.loop && end > start) {
-      if (t > end || t < start) t = start + std::fmod(std::fmod(t - start, end - start) + (end - start), end - start);
+      if (t > end || t < start)
+        t = start + std::fmod(std::fmod(t - start, end - start) + (end - start), end - start);
     } else if (t > length || t < 0) {
       t = std::clamp(t, 0.0, length);
       playback_.playing = false;
@@ -493,7 +502,8 @@ Session::TickResult Session::tick(double dt) {
   return result;
 }
 
-// --- undo ------------------------------------------------------------------------------------------
+// --- undo
+// ------------------------------------------------------------------------------------------
 
 bool Session::undo() {
   if (drag_) drag_end();

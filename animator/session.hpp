@@ -56,8 +56,8 @@ class SessionError : public std::runtime_error {
 constexpr double kDefaultClipRate = 30.0;
 
 struct Playback {
-  double time = 0;       // seconds
-  double speed = 1;      // playback rate (may be negative: backwards)
+  double time = 0;   // seconds
+  double speed = 1;  // playback rate (may be negative: backwards)
   bool playing = false;
   bool loop = true;
   double loop_start = 0;
@@ -82,7 +82,8 @@ class Session {
 
   // --- dragging: one undo entry per gesture -------------------------------------------------
   /// Grabs point p_LinkPoint (link frame) of `link`; the target starts at target_W.
-  void drag_begin(int link, const core::Vector3& target_W,
+  void drag_begin(int link,
+                  const core::Vector3& target_W,
                   const core::Vector3& p_LinkPoint = core::Vector3::Zero());
   /// Moves the drag target (absolute, world). A rotation makes it a pose drag.
   void drag_move(const core::Vector3& target_W,
@@ -96,7 +97,8 @@ class Session {
   void pin(int link, ik::TaskMode mode, const core::Vector3& p_LinkPoint = core::Vector3::Zero());
   void unpin(int link);
   /// Moves a pin's target.
-  void move_pin(int link, const core::Vector3& target_W,
+  void move_pin(int link,
+                const core::Vector3& target_W,
                 const std::optional<core::Quaternion>& rotation = std::nullopt);
   const std::vector<Pin>& pins() const { return doc_.pins; }
 

@@ -13,9 +13,9 @@
 
 #include "animator/edit_layer.hpp"
 #include "animator/motion_editor.hpp"
+#include "core/kinematics.hpp"
 #include "io/bvh.hpp"
 #include "io/gltf.hpp"
-#include "core/kinematics.hpp"
 
 namespace {
 
@@ -40,7 +40,8 @@ void bvh_parse(benchmark::State& state, const std::string& path) {
     io::BvhDocument doc = io::parse_bvh(text, path);
     benchmark::DoNotOptimize(doc.values.data());
   }
-  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(text.size()));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) *
+                          static_cast<int64_t>(text.size()));
 }
 
 // the whole export of an imported clip: rotations to Euler angles (unwrapped) and the text
@@ -63,7 +64,8 @@ void gltf_export(benchmark::State& state, const std::string& path) {
   core::Clip clip;
   clip.frame_time = imp.clip.frame_time;
   const auto frames = static_cast<std::size_t>(state.range(0));
-  for (std::size_t k = 0; k < frames; ++k) clip.frames.push_back(imp.clip.frames[k % imp.clip.frames.size()]);
+  for (std::size_t k = 0; k < frames; ++k)
+    clip.frames.push_back(imp.clip.frames[k % imp.clip.frames.size()]);
   io::GltfExportOptions o;
   o.stick_figure = true;
   std::size_t bytes = 0;
@@ -136,11 +138,15 @@ const bool registered = [] {
   std::sort(files.begin(), files.end());
   for (const fs::path& p : files) {
     const std::string n = "/" + p.stem().string();
-    benchmark::RegisterBenchmark(("BM_BvhParse" + n).c_str(), bvh_parse, p.string())->Unit(benchmark::kMillisecond);
-    benchmark::RegisterBenchmark(("BM_BvhWrite" + n).c_str(), bvh_write, p.string())->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("BM_BvhParse" + n).c_str(), bvh_parse, p.string())
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("BM_BvhWrite" + n).c_str(), bvh_write, p.string())
+        ->Unit(benchmark::kMillisecond);
   }
   const std::string walk = dir + "/bvh/cmu_walk_cgspeed.bvh";
-  benchmark::RegisterBenchmark("BM_GltfExport", gltf_export, walk)->Arg(10000)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BM_GltfExport", gltf_export, walk)
+      ->Arg(10000)
+      ->Unit(benchmark::kMillisecond);
   // the 31-joint CMU skeletons, as cgspeed and the 3ds Max release name their joints
   const std::vector<std::pair<std::string, EditLinks>> clips = {
       {"cmu_walk_cgspeed", {{"LeftFoot", "RightFoot", "LeftHand", "Head"}, "RightHand"}},

@@ -1,10 +1,11 @@
 #include "bench/bench_models.hpp"
 
+#include <urdf_parser/urdf_parser.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <kdl_parser/kdl_parser.hpp>
-#include <urdf_parser/urdf_parser.h>
 
 #include "core/human_figure.hpp"
 #include "io/urdf.hpp"
@@ -28,7 +29,8 @@ const std::vector<BenchModel>& models() {
     out.push_back({"human48", core::build_human_figure({}), "", ""});
     const std::string dir = bench_models_dir();
     if (dir.empty()) {
-      std::cerr << "benchmark model folder not found (set PINDRAG_BENCH_MODELS_DIR): only human48\n";
+      std::cerr
+          << "benchmark model folder not found (set PINDRAG_BENCH_MODELS_DIR): only human48\n";
       return out;
     }
     auto file = [&](const std::string& f) {

@@ -2,9 +2,10 @@
 // (../shared/bench) and their MuJoCo and KDL twins, so peers compare on identical input.
 #pragma once
 
+#include <mujoco/mujoco.h>
+
 #include <kdl/tree.hpp>
 #include <memory>
-#include <mujoco/mujoco.h>
 #include <string>
 #include <vector>
 
@@ -13,10 +14,10 @@
 namespace bench {
 
 struct BenchModel {
-  std::string name;                       // benchmark argument name, e.g. "human48_urdf"
+  std::string name;  // benchmark argument name, e.g. "human48_urdf"
   std::shared_ptr<const core::Model> model;
-  std::string mujoco_xml;                 // MJCF twin, empty when there is none
-  std::string kdl_urdf;                   // URDF for KDL (float6 base for free-root figures)
+  std::string mujoco_xml;  // MJCF twin, empty when there is none
+  std::string kdl_urdf;    // URDF for KDL (float6 base for free-root figures)
 };
 
 /// human48 (ours), human48_urdf, human34_urdf and chainN (N = 8, 32, 64, 128, 512), as far as

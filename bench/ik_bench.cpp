@@ -33,7 +33,9 @@ struct Scene {
       const int iq = m.idx_q[i];
       if (m.joint_type[i] == core::JointType::kRevolute) q0[iq] = 0.2 * std::sin(i);
       if (m.joint_type[i] == core::JointType::kSpherical)
-        core::set_quaternion_at(q0, iq, Quaternion(Eigen::AngleAxisd(0.15, Vector3(std::sin(i), 1, std::cos(i)).normalized())));
+        core::set_quaternion_at(
+            q0, iq,
+            Quaternion(Eigen::AngleAxisd(0.15, Vector3(std::sin(i), 1, std::cos(i)).normalized())));
     }
     core::Data d(m);
     core::forward_kinematics(m, d, q0);
@@ -52,7 +54,8 @@ struct Scene {
                                .target_R_W = Quaternion(X.R),
                                .mode = ik::TaskMode::kPose});
     }
-    for (const char* j : {"abdomen", "chest", "neck", "l_uarm", "r_uarm", "l_thigh", "l_farm", "r_farm"}) {
+    for (const char* j :
+         {"abdomen", "chest", "neck", "l_uarm", "r_uarm", "l_thigh", "l_farm", "r_farm"}) {
       problem.add(ik::JointReferenceTask{.joint = m.link_index(j)});
     }
   }
@@ -104,12 +107,14 @@ void BM_IkStep_Dense(benchmark::State& state) {
         }
       } else if (const auto* j = std::get_if<ik::JointReferenceTask>(&e.task)) {
         const int rows = ik::task_rows(m, *j);
-        ik::fill_reference_task(m, q, *j, s.reference_gain, {}, J2.middleRows(r2, rows), v2.segment(r2, rows));
+        ik::fill_reference_task(m, q, *j, s.reference_gain, {}, J2.middleRows(r2, rows),
+                                v2.segment(r2, rows));
         r2 += rows;
       }
     }
     // top: pseudoinverse, explicit projector W = E − J1⁺ J1
-    const Eigen::MatrixXd J1pinv = J1.transpose() * (J1 * J1.transpose()).llt().solve(Eigen::MatrixXd::Identity(6, 6));
+    const Eigen::MatrixXd J1pinv =
+        J1.transpose() * (J1 * J1.transpose()).llt().solve(Eigen::MatrixXd::Identity(6, 6));
     x = J1pinv * v1;
     W = Eigen::MatrixXd::Identity(n, n) - J1pinv * J1;
     // lower: S = J2 W, y = (SᵀS + kE)⁻¹ Sᵀ (v2 − J2 x)

@@ -52,7 +52,8 @@ void fk_link_jacobians(benchmark::State& state, const BenchModel& bm) {
   int k = 0;
   for (auto _ : state) {
     core::compute_joint_jacobians(m, data, qs[k++ % kConfigurations]);
-    for (int i = 1; i < m.njoints; ++i) core::point_jacobian(m, data, i, core::Vector3::Zero(), J[i]);
+    for (int i = 1; i < m.njoints; ++i)
+      core::point_jacobian(m, data, i, core::Vector3::Zero(), J[i]);
     benchmark::DoNotOptimize(J.back().linear.data());
   }
 }

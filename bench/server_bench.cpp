@@ -50,7 +50,8 @@ double resident_mib() {
   std::ifstream statm("/proc/self/statm");
   long pages_total = 0, pages_resident = 0;
   statm >> pages_total >> pages_resident;
-  return static_cast<double>(pages_resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+  return static_cast<double>(pages_resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) /
+         (1024.0 * 1024.0);
 }
 
 std::array<double, 3> hand_position(const json& snapshot) {
@@ -61,7 +62,10 @@ std::array<double, 3> hand_position(const json& snapshot) {
 }
 
 // One client dragging for `seconds`; appends its latencies (ms).
-void drag_client(const server::Server& srv, const Session& s, double seconds, std::vector<double>& latencies,
+void drag_client(const server::Server& srv,
+                 const Session& s,
+                 double seconds,
+                 std::vector<double>& latencies,
                  std::atomic<int>& failures) {
   try {
     const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
@@ -69,15 +73,19 @@ void drag_client(const server::Server& srv, const Session& s, double seconds, st
     ws.send({{"type", "hello"}, {"protocol", 1}});
     const auto start = hand_position(ws.read_until("snapshot"));
     ws.send({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}});
-    const auto t_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    const auto t_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(seconds));
     auto next = Clock::now();
     for (std::uint32_t seq = 1; Clock::now() < t_end; ++seq) {
       std::this_thread::sleep_until(next);
       next += kFramePeriod;
       const double phase = 2 * M_PI * seq / 120.0;  // a 2 s circle of 10 cm radius
       const auto sent = Clock::now();
-      ws.send({{"type", "drag_move"}, {"seq", seq},
-               {"target", {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
+      ws.send(
+          {{"type", "drag_move"},
+           {"seq", seq},
+           {"target",
+            {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
       for (;;) {
         const auto m = ws.read();
         if (m.text) continue;
@@ -114,10 +122,11 @@ void latency_run(server::Server& srv, int sessions, double seconds) {
   std::vector<double> all;
   for (const auto& l : latencies) all.insert(all.end(), l.begin(), l.end());
   const double rate = all.size() / seconds / sessions;
-  std::printf("drag_move -> pose, %2d session(s) at 60 Hz for %.0f s: samples %zu (%.1f Hz per client), "
-              "p50 %.3f ms, p99 %.3f ms, max %.3f ms, failed clients %d\n",
-              sessions, seconds, all.size(), rate, percentile(all, 50), percentile(all, 99),
-              all.empty() ? NAN : *std::max_element(all.begin(), all.end()), failures.load());
+  std::printf(
+      "drag_move -> pose, %2d session(s) at 60 Hz for %.0f s: samples %zu (%.1f Hz per client), "
+      "p50 %.3f ms, p99 %.3f ms, max %.3f ms, failed clients %d\n",
+      sessions, seconds, all.size(), rate, percentile(all, 50), percentile(all, 99),
+      all.empty() ? NAN : *std::max_element(all.begin(), all.end()), failures.load());
 }
 
 // A client that subscribes and then reads nothing for `stall` seconds while another client drags
@@ -151,10 +160,13 @@ void stalled_reader_run(server::Server& srv, double stall) {
     }
   } catch (const std::exception&) {
   }
-  std::printf("stalled reader for %.0f s while dragging at 60 Hz (%zu drag samples): resident %.1f MiB before, "
-              "peak %.1f MiB (+%.1f MiB); on resuming it received %d pose frames in 0.5 s; dragging client p99 "
-              "%.3f ms\n",
-              stall, latencies.size(), before, peak, peak - before, frames, percentile(latencies, 99));
+  std::printf(
+      "stalled reader for %.0f s while dragging at 60 Hz (%zu drag samples): resident %.1f MiB "
+      "before, "
+      "peak %.1f MiB (+%.1f MiB); on resuming it received %d pose frames in 0.5 s; dragging client "
+      "p99 "
+      "%.3f ms\n",
+      stall, latencies.size(), before, peak, peak - before, frames, percentile(latencies, 99));
 }
 
 }  // namespace
@@ -180,7 +192,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const fs::path web = fs::temp_directory_path() / ("pindrag-server-bench-" + std::to_string(::getpid()));
+  const fs::path web =
+      fs::temp_directory_path() / ("pindrag-server-bench-" + std::to_string(::getpid()));
   fs::create_directories(web);
   std::ofstream(web / "index.html") << "<!doctype html>";
   server::ServerOptions options;

@@ -34,7 +34,10 @@ double ease(double s) {
 }
 
 // Runs one scenario with one setting and adds to the metrics.
-void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSettings& settings, Metrics& out) {
+void run_scenario(const core::Model& m,
+                  const Scenario& sc,
+                  const ik::SolverSettings& settings,
+                  Metrics& out) {
   core::Data data(m);
   Eigen::VectorXd q = core::rest_configuration(m);
   core::forward_kinematics(m, data, q);
@@ -84,7 +87,8 @@ void run_scenario(const core::Model& m, const Scenario& sc, const ik::SolverSett
     out.us.push_back(r.microseconds);
     for (const ik::TaskReport& t : r.tasks) {
       if (t.id == drag_id) {
-        const double e = d->mode == ik::TaskMode::kOrientation ? t.orientation_error : t.position_error;
+        const double e =
+            d->mode == ik::TaskMode::kOrientation ? t.orientation_error : t.position_error;
         out.drag_sq += e * e;
         ++out.drag_frames;
       } else if (sc.reachable) {
@@ -103,8 +107,11 @@ std::string fmt(double x, int precision = 3) {
 }
 
 // A log–log scatter plot as SVG: one dot per setting, colour by iterations, the front circled.
-void write_scatter(const std::string& path, const std::string& title, const std::string& ylabel,
-                   const std::vector<SettingResult>& results, double SettingResult::*y,
+void write_scatter(const std::string& path,
+                   const std::string& title,
+                   const std::string& ylabel,
+                   const std::vector<SettingResult>& results,
+                   double SettingResult::*y,
                    bool SettingResult::*front) {
   const double W = 720, H = 460, L = 80, R = 20, T = 40, B = 60;
   auto safe_log = [](double v) { return std::log10(std::max(v, 1e-12)); };
@@ -123,49 +130,67 @@ void write_scatter(const std::string& path, const std::string& title, const std:
   auto Y = [&](double v) { return H - B - (safe_log(v) - y0) / (y1 - y0) * (H - T - B); };
   std::ofstream o(path);
   o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
-    << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  o << "<text x=\"" << W / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" << title << "</text>\n";
+    << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
+       "fill=\"white\"/>\n";
+  o << "<text x=\"" << W / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" << title
+    << "</text>\n";
   // grid and decade labels
   for (double e = std::ceil(y0); e <= y1; e += 1) {
     const double yy = H - B - (e - y0) / (y1 - y0) * (H - T - B);
-    o << "<line x1=\"" << L << "\" y1=\"" << yy << "\" x2=\"" << W - R << "\" y2=\"" << yy << "\" stroke=\"#ddd\"/>\n";
-    o << "<text x=\"" << L - 6 << "\" y=\"" << yy + 4 << "\" text-anchor=\"end\">1e" << int(e) << "</text>\n";
+    o << "<line x1=\"" << L << "\" y1=\"" << yy << "\" x2=\"" << W - R << "\" y2=\"" << yy
+      << "\" stroke=\"#ddd\"/>\n";
+    o << "<text x=\"" << L - 6 << "\" y=\"" << yy + 4 << "\" text-anchor=\"end\">1e" << int(e)
+      << "</text>\n";
   }
   for (double e = std::ceil(x0 * 4) / 4; e <= x1; e += 0.25) {
     const double xx = L + (e - x0) / (x1 - x0) * (W - L - R);
-    o << "<line x1=\"" << xx << "\" y1=\"" << T << "\" x2=\"" << xx << "\" y2=\"" << H - B << "\" stroke=\"#eee\"/>\n";
-    o << "<text x=\"" << xx << "\" y=\"" << H - B + 16 << "\" text-anchor=\"middle\">" << fmt(std::pow(10, e), 3) << "</text>\n";
+    o << "<line x1=\"" << xx << "\" y1=\"" << T << "\" x2=\"" << xx << "\" y2=\"" << H - B
+      << "\" stroke=\"#eee\"/>\n";
+    o << "<text x=\"" << xx << "\" y=\"" << H - B + 16 << "\" text-anchor=\"middle\">"
+      << fmt(std::pow(10, e), 3) << "</text>\n";
   }
-  o << "<text x=\"" << (L + W - R) / 2 << "\" y=\"" << H - 18 << "\" text-anchor=\"middle\">median time per frame (µs, log)</text>\n";
-  o << "<text x=\"18\" y=\"" << (T + H - B) / 2 << "\" text-anchor=\"middle\" transform=\"rotate(-90 18 " << (T + H - B) / 2
-    << ")\">" << ylabel << " (log)</text>\n";
+  o << "<text x=\"" << (L + W - R) / 2 << "\" y=\"" << H - 18
+    << "\" text-anchor=\"middle\">median time per frame (µs, log)</text>\n";
+  o << "<text x=\"18\" y=\"" << (T + H - B) / 2
+    << "\" text-anchor=\"middle\" transform=\"rotate(-90 18 " << (T + H - B) / 2 << ")\">" << ylabel
+    << " (log)</text>\n";
   const char* colours[] = {"#1f77b4", "#2ca02c", "#ff7f0e", "#d62728"};
   for (const auto& r : results) {
-    const int c = r.settings.iterations == 1 ? 0 : r.settings.iterations == 2 ? 1 : r.settings.iterations == 4 ? 2 : 3;
-    o << "<circle cx=\"" << X(r.median_us) << "\" cy=\"" << Y(r.*y) << "\" r=\"3.5\" fill=\"" << colours[c]
-      << "\" fill-opacity=\"0.75\"><title>" << r.label << "</title></circle>\n";
+    const int c = r.settings.iterations == 1   ? 0
+                  : r.settings.iterations == 2 ? 1
+                  : r.settings.iterations == 4 ? 2
+                                               : 3;
+    o << "<circle cx=\"" << X(r.median_us) << "\" cy=\"" << Y(r.*y) << "\" r=\"3.5\" fill=\""
+      << colours[c] << "\" fill-opacity=\"0.75\"><title>" << r.label << "</title></circle>\n";
     if (front && r.*front) {
-      o << "<circle cx=\"" << X(r.median_us) << "\" cy=\"" << Y(r.*y) << "\" r=\"7\" fill=\"none\" stroke=\"black\"/>\n";
+      o << "<circle cx=\"" << X(r.median_us) << "\" cy=\"" << Y(r.*y)
+        << "\" r=\"7\" fill=\"none\" stroke=\"black\"/>\n";
     }
   }
   // legend
   const int iters[] = {1, 2, 4, 8};
   for (int k = 0; k < 4; ++k) {
-    o << "<circle cx=\"" << W - 150 << "\" cy=\"" << T + 10 + 16 * k << "\" r=\"4\" fill=\"" << colours[k] << "\"/>"
-      << "<text x=\"" << W - 140 << "\" y=\"" << T + 14 + 16 * k << "\">" << iters[k] << " iteration" << (k ? "s" : "") << "</text>\n";
+    o << "<circle cx=\"" << W - 150 << "\" cy=\"" << T + 10 + 16 * k << "\" r=\"4\" fill=\""
+      << colours[k] << "\"/>"
+      << "<text x=\"" << W - 140 << "\" y=\"" << T + 14 + 16 * k << "\">" << iters[k]
+      << " iteration" << (k ? "s" : "") << "</text>\n";
   }
   if (front) {
-    o << "<circle cx=\"" << W - 150 << "\" cy=\"" << T + 74 << "\" r=\"7\" fill=\"none\" stroke=\"black\"/><text x=\""
-      << W - 140 << "\" y=\"" << T + 78 << "\">Pareto front</text>\n";
+    o << "<circle cx=\"" << W - 150 << "\" cy=\"" << T + 74
+      << "\" r=\"7\" fill=\"none\" stroke=\"black\"/><text x=\"" << W - 140 << "\" y=\"" << T + 78
+      << "\">Pareto front</text>\n";
   }
   o << "</svg>\n";
 }
 
 // marks settings that no other setting beats on both time and error
-void mark_front(std::vector<SettingResult>& rs, double SettingResult::*y, bool SettingResult::*front) {
+void mark_front(std::vector<SettingResult>& rs,
+                double SettingResult::*y,
+                bool SettingResult::*front) {
   for (auto& a : rs) {
     a.*front = std::none_of(rs.begin(), rs.end(), [&](const SettingResult& b) {
-      return b.median_us <= a.median_us && b.*y <= a.*y && (b.median_us < a.median_us || b.*y < a.*y);
+      return b.median_us <= a.median_us && b.*y <= a.*y &&
+             (b.median_us < a.median_us || b.*y < a.*y);
     });
   }
 }
@@ -173,18 +198,23 @@ void mark_front(std::vector<SettingResult>& rs, double SettingResult::*y, bool S
 }  // namespace
 
 std::vector<Scenario> report_scenarios() {
-  return {{"reach", "drag the right hand 0.5 m up and forward along an eased path, both feet pinned", 120},
-          {"reach_beyond", "drag the right hand 1.6 m away (beyond reach), both feet pinned; the pins give way by "
-           "design, so this scenario counts for the drag error only", 120, false},
-          {"squat", "drag the pelvis 0.28 m down and 0.25 m back (a squat), both feet pinned", 120},
-          {"twist", "turn the chest 60° about the vertical (orientation drag), both feet pinned", 120}};
+  return {
+      {"reach", "drag the right hand 0.5 m up and forward along an eased path, both feet pinned",
+       120},
+      {"reach_beyond",
+       "drag the right hand 1.6 m away (beyond reach), both feet pinned; the pins give way by "
+       "design, so this scenario counts for the drag error only",
+       120, false},
+      {"squat", "drag the pelvis 0.28 m down and 0.25 m back (a squat), both feet pinned", 120},
+      {"twist", "turn the chest 60° about the vertical (orientation drag), both feet pinned", 120}};
 }
 
 std::vector<SettingResult> run_accuracy_sweep(const std::function<void(int, int)>& progress) {
   const auto model = core::build_human_figure({});
   std::vector<ik::SolverSettings> grid;
   for (int iterations : {1, 2, 4, 8}) {
-    for (ik::DampingSchedule schedule : {ik::DampingSchedule::kResidual, ik::DampingSchedule::kConstant}) {
+    for (ik::DampingSchedule schedule :
+         {ik::DampingSchedule::kResidual, ik::DampingSchedule::kConstant}) {
       for (double damping : {1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 3e-2, 1e-1}) {
         for (double gain : {20.0, 40.0, 60.0}) {
           ik::SolverSettings s;
@@ -213,8 +243,9 @@ std::vector<SettingResult> run_accuracy_sweep(const std::function<void(int, int)
     }
     SettingResult r;
     r.settings = grid[g];
-    r.label = "iterations " + std::to_string(grid[g].iterations) + ", " + ik::to_string(grid[g].damping_schedule) +
-              " k " + fmt(grid[g].damping, 2) + ", gain " + fmt(grid[g].pin_gain, 3);
+    r.label = "iterations " + std::to_string(grid[g].iterations) + ", " +
+              ik::to_string(grid[g].damping_schedule) + " k " + fmt(grid[g].damping, 2) +
+              ", gain " + fmt(grid[g].pin_gain, 3);
     r.median_us = best_median;
     r.drag_error = std::sqrt(m.drag_sq / std::max(1, m.drag_frames));
     r.pin_drift = m.pin_drift;
@@ -228,56 +259,73 @@ std::vector<SettingResult> run_accuracy_sweep(const std::function<void(int, int)
   return out;
 }
 
-std::string write_accuracy_report(const std::vector<SettingResult>& results, const std::string& dir) {
+std::string write_accuracy_report(const std::vector<SettingResult>& results,
+                                  const std::string& dir) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);
-  write_scatter(dir + "/accuracy-drag.svg", "Drag error against time per frame", "RMS drag error (m or rad)", results,
-                &SettingResult::drag_error, &SettingResult::pareto_time_drag);
-  write_scatter(dir + "/accuracy-pins.svg", "Pin drift against time per frame", "largest pin drift (m)", results,
-                &SettingResult::pin_drift, &SettingResult::pareto_time_pins);
-  write_scatter(dir + "/accuracy-limits.svg", "Range violation against time per frame", "largest range violation (rad)",
-                results, &SettingResult::limit_violation, nullptr);
+  write_scatter(dir + "/accuracy-drag.svg", "Drag error against time per frame",
+                "RMS drag error (m or rad)", results, &SettingResult::drag_error,
+                &SettingResult::pareto_time_drag);
+  write_scatter(dir + "/accuracy-pins.svg", "Pin drift against time per frame",
+                "largest pin drift (m)", results, &SettingResult::pin_drift,
+                &SettingResult::pareto_time_pins);
+  write_scatter(dir + "/accuracy-limits.svg", "Range violation against time per frame",
+                "largest range violation (rad)", results, &SettingResult::limit_violation, nullptr);
 
   const std::string page = dir + "/accuracy-vs-time.md";
   std::ofstream o(page);
   o << "# What accuracy costs in time\n\n"
     << "Generated by `pindrag bench --report " << dir << "`: every setting below runs four "
-    << "scripted drags on the 48-DOF human figure (60 frames per second, feet pinned in pose) and is timed per frame "
-    << "on this machine. One dot per setting; circled dots are on the Pareto front (no other setting is both faster "
-    << "and more accurate). Times are wall-clock medians of the whole frame (all iterations, kinematics, Jacobians, "
-    << "range checks, report), the best of three runs. Pin drift is the largest position error of a pinned foot in "
+    << "scripted drags on the 48-DOF human figure (60 frames per second, feet pinned in pose) and "
+       "is timed per frame "
+    << "on this machine. One dot per setting; circled dots are on the Pareto front (no other "
+       "setting is both faster "
+    << "and more accurate). Times are wall-clock medians of the whole frame (all iterations, "
+       "kinematics, Jacobians, "
+    << "range checks, report), the best of three runs. Pin drift is the largest position error of "
+       "a pinned foot in "
     << "the scenarios whose drag is reachable.\n\nScenarios:\n\n";
-  for (const Scenario& s : report_scenarios()) o << "- **" << s.name << "**: " << s.description << " (" << s.frames << " frames)\n";
-  o << "\nSwept: iterations per frame 1, 2, 4, 8; lower-level damping k 1e-6 … 1e-1 (decades and the default 3e-2), constant or scheduled by the "
-    << "residual (Sugihara); drag and pin gains 20, 40, 60 s⁻¹. Everything else at the defaults of `ik/solver.hpp`.\n\n"
-    << "![drag error](accuracy-drag.svg)\n\n![pin drift](accuracy-pins.svg)\n\n![range violation](accuracy-limits.svg)\n\n"
+  for (const Scenario& s : report_scenarios())
+    o << "- **" << s.name << "**: " << s.description << " (" << s.frames << " frames)\n";
+  o << "\nSwept: iterations per frame 1, 2, 4, 8; lower-level damping k 1e-6 … 1e-1 (decades and "
+       "the default 3e-2), constant or scheduled by the "
+    << "residual (Sugihara); drag and pin gains 20, 40, 60 s⁻¹. Everything else at the defaults of "
+       "`ik/solver.hpp`.\n\n"
+    << "![drag error](accuracy-drag.svg)\n\n![pin drift](accuracy-pins.svg)\n\n![range "
+       "violation](accuracy-limits.svg)\n\n"
     << "## The Pareto front for the drag\n\n"
-    << "| setting | µs/frame | RMS drag error | pin drift (m) | range violation (rad) | max joint speed (rad/s) |\n"
+    << "| setting | µs/frame | RMS drag error | pin drift (m) | range violation (rad) | max joint "
+       "speed (rad/s) |\n"
     << "|---|---|---|---|---|---|\n";
   std::vector<SettingResult> front;
   for (const auto& r : results) {
     if (r.pareto_time_drag || r.pareto_time_pins) front.push_back(r);
   }
-  std::sort(front.begin(), front.end(), [](const auto& a, const auto& b) { return a.median_us < b.median_us; });
+  std::sort(front.begin(), front.end(),
+            [](const auto& a, const auto& b) { return a.median_us < b.median_us; });
   for (const auto& r : front) {
-    o << "| " << r.label << (r.pareto_time_pins && !r.pareto_time_drag ? " (pins front)" : "") << " | " << fmt(r.median_us) << " | "
-      << fmt(r.drag_error) << " | " << fmt(r.pin_drift) << " | " << fmt(r.limit_violation) << " | " << fmt(r.joint_speed) << " |\n";
+    o << "| " << r.label << (r.pareto_time_pins && !r.pareto_time_drag ? " (pins front)" : "")
+      << " | " << fmt(r.median_us) << " | " << fmt(r.drag_error) << " | " << fmt(r.pin_drift)
+      << " | " << fmt(r.limit_violation) << " | " << fmt(r.joint_speed) << " |\n";
   }
   // the defaults, for reference
   const ik::SolverSettings d;
   for (const auto& r : results) {
     if (r.settings.iterations == d.iterations && r.settings.damping == d.damping &&
         r.settings.damping_schedule == d.damping_schedule && r.settings.pin_gain == d.pin_gain) {
-      o << "\nThe default setting (" << r.label << "): " << fmt(r.median_us) << " µs per frame, RMS drag error "
-        << fmt(r.drag_error) << ", pin drift " << fmt(r.pin_drift) << " m, range violation " << fmt(r.limit_violation)
+      o << "\nThe default setting (" << r.label << "): " << fmt(r.median_us)
+        << " µs per frame, RMS drag error " << fmt(r.drag_error) << ", pin drift "
+        << fmt(r.pin_drift) << " m, range violation " << fmt(r.limit_violation)
         << " rad, max joint speed " << fmt(r.joint_speed) << " rad/s.\n";
     }
   }
-  o << "\n## All settings\n\n| setting | µs/frame | RMS drag error | pin drift (m) | range violation (rad) | max joint speed (rad/s) |\n"
+  o << "\n## All settings\n\n| setting | µs/frame | RMS drag error | pin drift (m) | range "
+       "violation (rad) | max joint speed (rad/s) |\n"
     << "|---|---|---|---|---|---|\n";
   for (const auto& r : results) {
-    o << "| " << r.label << " | " << fmt(r.median_us) << " | " << fmt(r.drag_error) << " | " << fmt(r.pin_drift) << " | "
-      << fmt(r.limit_violation) << " | " << fmt(r.joint_speed) << " |\n";
+    o << "| " << r.label << " | " << fmt(r.median_us) << " | " << fmt(r.drag_error) << " | "
+      << fmt(r.pin_drift) << " | " << fmt(r.limit_violation) << " | " << fmt(r.joint_speed)
+      << " |\n";
   }
   return page;
 }

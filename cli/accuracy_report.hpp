@@ -25,11 +25,11 @@ struct Scenario {
 struct SettingResult {
   std::string label;
   ik::SolverSettings settings;
-  double median_us = 0;         // median wall time of one frame (best of the repetitions)
-  double drag_error = 0;        // RMS over frames and scenarios (m)
-  double pin_drift = 0;         // largest pin position error in reachable scenarios (m)
-  double limit_violation = 0;   // largest range violation (rad)
-  double joint_speed = 0;       // largest joint speed (rad/s)
+  double median_us = 0;           // median wall time of one frame (best of the repetitions)
+  double drag_error = 0;          // RMS over frames and scenarios (m)
+  double pin_drift = 0;           // largest pin position error in reachable scenarios (m)
+  double limit_violation = 0;     // largest range violation (rad)
+  double joint_speed = 0;         // largest joint speed (rad/s)
   bool pareto_time_drag = false;  // on the front of (time, drag error)
   bool pareto_time_pins = false;  // on the front of (time, pin drift)
 };
@@ -41,6 +41,7 @@ std::vector<Scenario> report_scenarios();
 std::vector<SettingResult> run_accuracy_sweep(const std::function<void(int, int)>& progress);
 
 /// Writes DIR/accuracy-vs-time.md and its SVG plots; returns the page's path.
-std::string write_accuracy_report(const std::vector<SettingResult>& results, const std::string& dir);
+std::string write_accuracy_report(const std::vector<SettingResult>& results,
+                                  const std::string& dir);
 
 }  // namespace cli

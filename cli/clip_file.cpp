@@ -6,9 +6,9 @@
 #include <stdexcept>
 
 #include "core/configuration.hpp"
+#include "core/model_builder.hpp"
 #include "io/assimp_import.hpp"
 #include "io/gltf.hpp"
-#include "core/model_builder.hpp"
 
 namespace cli {
 
@@ -57,8 +57,8 @@ core::Clip resample(const core::Model& model, const core::Clip& clip, double fps
   const double last = std::floor(clip.duration() * fps + 1e-3);
   if (last + 1 > kMaxResampledFrames) {
     throw std::invalid_argument("--fps: resampling at " + std::to_string(fps) +
-                                " fps would make more than " +
-                                std::to_string(io::kMaxBvhFrames) + " frames");
+                                " fps would make more than " + std::to_string(io::kMaxBvhFrames) +
+                                " frames");
   }
   const int n = static_cast<int>(last) + 1;
   out.frames.resize(static_cast<std::size_t>(n));
@@ -71,8 +71,9 @@ core::Clip resample(const core::Model& model, const core::Clip& clip, double fps
 ClipFile read_clip_file(const std::string& path, const ClipReadOptions& options) {
   const auto format = clip_format(path);
   if (!format) {
-    refuse(path + ": unknown clip format (rule: the extension must be .bvh, .gltf, .glb, .fbx "
-                  "or .dae)");
+    refuse(path +
+           ": unknown clip format (rule: the extension must be .bvh, .gltf, .glb, .fbx "
+           "or .dae)");
   }
   if (options.fps && !(std::isfinite(*options.fps) && *options.fps > 0 && *options.fps <= 1000)) {
     refuse(path + ": --fps must be a number in (0, 1000]");
@@ -115,12 +116,15 @@ ClipFile read_clip_file(const std::string& path, const ClipReadOptions& options)
   return out;
 }
 
-void write_clip_file(const std::string& path, const ClipFile& source, const core::Clip& clip,
+void write_clip_file(const std::string& path,
+                     const ClipFile& source,
+                     const core::Clip& clip,
                      const ClipWriteOptions& options) {
   const auto format = clip_format(path);
   if (!format || !writable(*format)) {
-    throw std::invalid_argument(path + ": cannot write this format (rule: the output extension "
-                                       "must be .bvh, .gltf or .glb)");
+    throw std::invalid_argument(path +
+                                ": cannot write this format (rule: the output extension "
+                                "must be .bvh, .gltf or .glb)");
   }
   if (*format == ClipFormat::kBvh) {
     io::BvhExportOptions o;
@@ -138,7 +142,7 @@ void write_clip_file(const std::string& path, const ClipFile& source, const core
   o.stick_figure = options.stick_figure && (!source.skin || source.skin->empty());
   if (options.progress) options.progress(0.0);
   io::save_gltf_file(path, *source.model, &clip,
-                           source.skin && !source.skin->empty() ? source.skin.get() : nullptr, o);
+                     source.skin && !source.skin->empty() ? source.skin.get() : nullptr, o);
   if (options.progress) options.progress(1.0);
 }
 

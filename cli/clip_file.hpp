@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "core/clip.hpp"
-#include "io/bvh.hpp"
 #include "core/model.hpp"
 #include "core/skin.hpp"
+#include "io/bvh.hpp"
 
 namespace cli {
 
@@ -27,17 +27,17 @@ bool writable(ClipFormat f);
 struct ClipFile {
   std::shared_ptr<const core::Model> model;
   core::Clip clip;
-  std::optional<io::BvhLayout> bvh_layout;      // BVH input: names, channel orders, scale
-  std::shared_ptr<const core::SkinnedMesh> skin;      // skinned input: the mesh
-  std::string clip_name;                              // the file's animation name (may be empty)
+  std::optional<io::BvhLayout> bvh_layout;        // BVH input: names, channel orders, scale
+  std::shared_ptr<const core::SkinnedMesh> skin;  // skinned input: the mesh
+  std::string clip_name;                          // the file's animation name (may be empty)
   int clips_in_file = 1;
-  std::string unit;                                   // BVH input: the unit chosen
+  std::string unit;  // BVH input: the unit chosen
   std::vector<std::string> warnings;
 };
 
 struct ClipReadOptions {
   std::optional<double> bvh_scale;  // metres per BVH file unit; empty: automatic
-  std::optional<double> fps;        // resample to this rate; empty: the file's rate (30 for skinned)
+  std::optional<double> fps;  // resample to this rate; empty: the file's rate (30 for skinned)
   std::function<void(double)> progress;
 };
 
@@ -55,7 +55,9 @@ struct ClipWriteOptions {
 
 /// Writes `clip` of `source.model` (with its skin and BVH layout) by the extension of `path`,
 /// atomically. @throws std::invalid_argument or std::system_error naming the path
-void write_clip_file(const std::string& path, const ClipFile& source, const core::Clip& clip,
+void write_clip_file(const std::string& path,
+                     const ClipFile& source,
+                     const core::Clip& clip,
                      const ClipWriteOptions& options = {});
 
 /// The clip resampled at `fps` frames per second from 0 to its duration (interpolated on the

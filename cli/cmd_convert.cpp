@@ -23,19 +23,22 @@ void convert(const ConvertArgs& a) {
   const auto in_format = clip_format(a.in);
   const auto out_format = clip_format(a.out);
   if (!out_format || !writable(*out_format)) {
-    throw std::invalid_argument("OUT: " + a.out + " (rule: the extension must be .bvh, .gltf or .glb)");
+    throw std::invalid_argument("OUT: " + a.out +
+                                " (rule: the extension must be .bvh, .gltf or .glb)");
   }
   const bool bvh_in = in_format == ClipFormat::kBvh, bvh_out = out_format == ClipFormat::kBvh;
   if (!a.order.empty()) {
     if (!bvh_out) throw std::invalid_argument("--order: applies to a BVH output only");
     if (!io::parse_rotation_order(a.order)) {
-      throw std::invalid_argument("--order: '" + a.order + "' (rule: a permutation of X, Y, Z such as ZXY)");
+      throw std::invalid_argument("--order: '" + a.order +
+                                  "' (rule: a permutation of X, Y, Z such as ZXY)");
     }
   }
   if (a.scale && !(std::isfinite(*a.scale) && *a.scale > 0)) {
     throw std::invalid_argument("--scale: must be a positive number (metres per BVH file unit)");
   }
-  if (a.scale && !bvh_in && !bvh_out) throw std::invalid_argument("--scale: applies to BVH files only");
+  if (a.scale && !bvh_in && !bvh_out)
+    throw std::invalid_argument("--scale: applies to BVH files only");
 
   ProgressBar bar("converting", !a.quiet);
   // --scale is the unit of the BVH side: the input's when it is BVH (the output then keeps that
@@ -62,21 +65,25 @@ void convert(const ConvertArgs& a) {
 
 void add_convert_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "convert", "convert an animation: BVH <-> glTF/GLB, skinned glTF/GLB/FBX/DAE -> glTF/GLB/BVH");
+      "convert",
+      "convert an animation: BVH <-> glTF/GLB, skinned glTF/GLB/FBX/DAE -> glTF/GLB/BVH");
   auto args = std::make_shared<ConvertArgs>();
   cmd->add_option("IN", args->in, "input clip (.bvh, .gltf, .glb, .fbx, .dae)")->required();
   cmd->add_option("OUT", args->out, "output clip (.bvh, .gltf, .glb)")->required();
-  cmd->add_option("--order", args->order, "BVH output rotation order, e.g. ZXY (default: the "
-                                          "input's orders for a BVH input, else ZXY)");
-  cmd->add_option("--scale", args->scale, "metres per BVH file unit: of the input when it is "
-                                          "BVH (default: chosen from the skeleton's size; the "
-                                          "output keeps it), else of the BVH output (default 1)");
+  cmd->add_option("--order", args->order,
+                  "BVH output rotation order, e.g. ZXY (default: the "
+                  "input's orders for a BVH input, else ZXY)");
+  cmd->add_option("--scale", args->scale,
+                  "metres per BVH file unit: of the input when it is "
+                  "BVH (default: chosen from the skeleton's size; the "
+                  "output keeps it), else of the BVH output (default 1)");
   cmd->add_option("--fps", args->fps, "resample the clip at this frame rate");
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] {
     try {
       convert(*args);
-    } catch (const std::exception& e) {  // ModelError, invalid_argument, system_error: all name the file
+    } catch (
+        const std::exception& e) {  // ModelError, invalid_argument, system_error: all name the file
       std::cerr << "pindrag convert: " << e.what() << "\n";
       throw CLI::RuntimeError(1);
     }

@@ -3,8 +3,8 @@
 #include "cli/commands.hpp"
 #include "cli/dynamics_state.hpp"
 #include "cli/json_fields.hpp"
-#include "io/bundled_characters.hpp"
 #include "core/model_edit.hpp"
+#include "io/bundled_characters.hpp"
 
 namespace cli {
 

@@ -20,7 +20,8 @@ struct EditArgs {
 void edit(const EditArgs& a) {
   const auto out_format = clip_format(a.out);
   if (!out_format || !writable(*out_format)) {
-    throw std::invalid_argument("-o: " + a.out + " (rule: the extension must be .bvh, .gltf or .glb)");
+    throw std::invalid_argument("-o: " + a.out +
+                                " (rule: the extension must be .bvh, .gltf or .glb)");
   }
   ClipFile source = read_clip_file(a.clip);
   EditScript script;
@@ -46,8 +47,9 @@ void edit(const EditArgs& a) {
 }  // namespace
 
 void add_edit_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("edit", "edit a clip in motion from a script of pins and drag "
-                                         "trajectories (docs/edit-script.md)");
+  auto* cmd = app.add_subcommand("edit",
+                                 "edit a clip in motion from a script of pins and drag "
+                                 "trajectories (docs/edit-script.md)");
   auto args = std::make_shared<EditArgs>();
   cmd->add_option("CLIP", args->clip, "clip to edit (.bvh, .gltf, .glb, .fbx, .dae)")->required();
   cmd->add_option("--script", args->script, "edit script (JSON)")->required();

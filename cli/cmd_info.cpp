@@ -56,9 +56,10 @@ nlohmann::json clip_summary(const std::string& path) {
 }  // namespace
 
 void add_info_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("info", "print a JSON summary of a character file (or a bundled "
-                                         "character name) or of a clip (.bvh, .gltf, .glb, .fbx, "
-                                         ".dae)");
+  auto* cmd = app.add_subcommand("info",
+                                 "print a JSON summary of a character file (or a bundled "
+                                 "character name) or of a clip (.bvh, .gltf, .glb, .fbx, "
+                                 ".dae)");
   auto file = std::make_shared<std::string>();
   cmd->add_option("FILE", *file, "character file (.urdf, .json), bundled name, or clip file")
       ->required();

@@ -16,8 +16,10 @@ namespace {
 
 // $XDG_DATA_HOME/pindrag, else ~/.local/share/pindrag, else ./pindrag-data.
 std::string default_data_dir() {
-  if (const char* xdg = std::getenv("XDG_DATA_HOME"); xdg && *xdg) return std::string(xdg) + "/pindrag";
-  if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.local/share/pindrag";
+  if (const char* xdg = std::getenv("XDG_DATA_HOME"); xdg && *xdg)
+    return std::string(xdg) + "/pindrag";
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return std::string(home) + "/.local/share/pindrag";
   return "pindrag-data";
 }
 
@@ -42,8 +44,10 @@ int serve(const server::ServerOptions& options) {
     return 1;
   }
   srv->start();
-  std::cout << "pindrag serve: sessions in " << (options.data_dir.empty() ? "memory" : options.data_dir) << " ("
-            << srv->restored_sessions() << " restored); WebSocket on port " << srv->ws_port() << "\n"
+  std::cout << "pindrag serve: sessions in "
+            << (options.data_dir.empty() ? "memory" : options.data_dir) << " ("
+            << srv->restored_sessions() << " restored); WebSocket on port " << srv->ws_port()
+            << "\n"
             << "Open " << srv->url() << std::endl;
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);
@@ -55,18 +59,26 @@ int serve(const server::ServerOptions& options) {
 }  // namespace
 
 void add_serve_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("serve", "serve the posing page and its WebSocket (open the printed URL)");
+  auto* cmd =
+      app.add_subcommand("serve", "serve the posing page and its WebSocket (open the printed URL)");
   auto options = std::make_shared<server::ServerOptions>();
   options->data_dir = default_data_dir();
-  cmd->add_option("--host", options->host, "address to listen on (loopback unless you need otherwise)")
+  cmd->add_option("--host", options->host,
+                  "address to listen on (loopback unless you need otherwise)")
       ->capture_default_str();
-  cmd->add_option("--port", options->port, "HTTP port (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
-  cmd->add_option("--ws-port", options->ws_port, "WebSocket port (default: --port + 1)")->check(CLI::Range(0, 65535));
-  cmd->add_option("--character", options->character, "bundled character name or character file offered to the page")
+  cmd->add_option("--port", options->port, "HTTP port (0: any free port)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--ws-port", options->ws_port, "WebSocket port (default: --port + 1)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--character", options->character,
+                  "bundled character name or character file offered to the page")
       ->capture_default_str();
-  cmd->add_option("--data-dir", options->data_dir, "folder where sessions are saved and restored from")
+  cmd->add_option("--data-dir", options->data_dir,
+                  "folder where sessions are saved and restored from")
       ->capture_default_str();
-  cmd->add_option("--web-root", options->web_root, "folder of the page (default: the source tree's web/)");
+  cmd->add_option("--web-root", options->web_root,
+                  "folder of the page (default: the source tree's web/)");
   cmd->callback([options] {
     const int code = serve(*options);
     if (code != 0) throw CLI::RuntimeError(code);

@@ -7,8 +7,9 @@
 namespace cli {
 
 void add_solve_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("solve", "run the pin-and-drag IK headless on a request file "
-                                          "and print per-frame errors and the final pose (docs/ik.md)");
+  auto* cmd = app.add_subcommand("solve",
+                                 "run the pin-and-drag IK headless on a request file "
+                                 "and print per-frame errors and the final pose (docs/ik.md)");
   auto request = std::make_shared<std::string>();
   cmd->add_option("--request", *request, "request JSON file")->required();
   cmd->callback([request] {

@@ -21,14 +21,14 @@ struct ScriptPin {
 };
 
 struct DragKey {
-  double time = 0;                              // seconds of the clip
+  double time = 0;                                 // seconds of the clip
   core::Vector3 position = core::Vector3::Zero();  // offset from the clip's point, or world
 };
 
 struct ScriptDrag {
   int link = 0;
   core::Vector3 point = core::Vector3::Zero();  // link frame
-  bool relative = true;  // keys are offsets from where the (layered) clip has the point
+  bool relative = true;       // keys are offsets from where the (layered) clip has the point
   std::vector<DragKey> keys;  // strictly increasing times; linear between, held beyond
 
   /// The key trajectory at time t (linear interpolation, clamped at both ends).

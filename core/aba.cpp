@@ -41,8 +41,8 @@ void add_to_parent(const Transform& X_PC, const Matrix6& Ia, Matrix6& Ia_parent)
 // pass 2 for one joint with NV coordinates: U = IA S, D⁻¹ = (Sᵀ U)⁻¹, u = τ − Sᵀ pA, then the
 // articulated inertia and bias force the parent sees (RBDA Table 7.1)
 template <int NV>
-void articulate(const Model& model, Data& data, int i, const Eigen::VectorXd& tau, Matrix6& Ia,
-                Vector6& pa) {
+void articulate(
+    const Model& model, Data& data, int i, const Eigen::VectorXd& tau, Matrix6& Ia, Vector6& pa) {
   const Eigen::Matrix<double, 6, NV> S = subspace_matrix<NV>(model, i);
   const Eigen::Matrix<double, 6, NV> U = data.IA[i] * S;
   const Eigen::Matrix<double, NV, NV> D = S.transpose() * U;
@@ -60,8 +60,8 @@ void articulate(const Model& model, Data& data, int i, const Eigen::VectorXd& ta
 // pass 2 for a revolute or prismatic joint, the common case: S is one column [a; 0] or [0; a], so
 // U = IA S is a 6 x 3 block times the axis (a column of IA for a frame axis), D is a scalar and
 // the update of Ia is a symmetric rank-one product (same formulas as articulate<1>)
-void articulate_1dof(const Model& model, Data& data, int i, const Eigen::VectorXd& tau,
-                     Matrix6& Ia, Vector6& pa) {
+void articulate_1dof(
+    const Model& model, Data& data, int i, const Eigen::VectorXd& tau, Matrix6& Ia, Vector6& pa) {
   // Ia is written here (not copied from IA first); pa holds pA_i on entry
   const bool revolute = model.joint_type[i] == JointType::kRevolute;
   const int k = model.axis_index[i];
@@ -74,8 +74,8 @@ void articulate_1dof(const Model& model, Data& data, int i, const Eigen::VectorX
   }
   const double D = k >= 0 ? U[off + k] : model.axis[i].dot(U.segment<3>(off));
   const double Dinv = 1.0 / D;
-  const double u = tau[model.idx_v[i]] -
-                   (k >= 0 ? pa[off + k] : model.axis[i].dot(pa.segment<3>(off)));
+  const double u =
+      tau[model.idx_v[i]] - (k >= 0 ? pa[off + k] : model.axis[i].dot(pa.segment<3>(off)));
   data.U[i].col(0) = U;
   data.Dinv[i](0, 0) = Dinv;
   data.u[i][0] = u;
@@ -95,8 +95,11 @@ void accelerate(const Model& model, Data& data, int i, Motion& a) {
   a = Motion::from_vector(a.vector() + subspace_matrix<NV>(model, i) * qdd);
 }
 
-const Eigen::VectorXd& aba_impl(const Model& model, Data& data, const Eigen::VectorXd& q,
-                                const Eigen::VectorXd& v, const Eigen::VectorXd& tau,
+const Eigen::VectorXd& aba_impl(const Model& model,
+                                Data& data,
+                                const Eigen::VectorXd& q,
+                                const Eigen::VectorXd& v,
+                                const Eigen::VectorXd& tau,
                                 const std::vector<Force>* f_ext) {
   // pass 1, root to leaves: velocities, velocity-product terms, body inertias and bias forces
   data.v[0] = Motion::Zero();
@@ -119,9 +122,15 @@ const Eigen::VectorXd& aba_impl(const Model& model, Data& data, const Eigen::Vec
         Ia = data.IA[i];
         pa += Ia * data.c[i].vector();
         break;
-      case 1: articulate_1dof(model, data, i, tau, Ia, pa); break;
-      case 3: articulate<3>(model, data, i, tau, Ia, pa); break;
-      case 6: articulate<6>(model, data, i, tau, Ia, pa); break;
+      case 1:
+        articulate_1dof(model, data, i, tau, Ia, pa);
+        break;
+      case 3:
+        articulate<3>(model, data, i, tau, Ia, pa);
+        break;
+      case 6:
+        articulate<6>(model, data, i, tau, Ia, pa);
+        break;
     }
     const int p = model.parent[i];
     if (p > 0) {
@@ -144,9 +153,14 @@ const Eigen::VectorXd& aba_impl(const Model& model, Data& data, const Eigen::Vec
         }
         break;
       }
-      case 3: accelerate<3>(model, data, i, a); break;
-      case 6: accelerate<6>(model, data, i, a); break;
-      default: break;
+      case 3:
+        accelerate<3>(model, data, i, a);
+        break;
+      case 6:
+        accelerate<6>(model, data, i, a);
+        break;
+      default:
+        break;
     }
     data.a[i] = a;
   }
@@ -155,13 +169,19 @@ const Eigen::VectorXd& aba_impl(const Model& model, Data& data, const Eigen::Vec
 
 }  // namespace
 
-const Eigen::VectorXd& aba(const Model& model, Data& data, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& v, const Eigen::VectorXd& tau) {
+const Eigen::VectorXd& aba(const Model& model,
+                           Data& data,
+                           const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& v,
+                           const Eigen::VectorXd& tau) {
   return aba_impl(model, data, q, v, tau, nullptr);
 }
 
-const Eigen::VectorXd& aba(const Model& model, Data& data, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& v, const Eigen::VectorXd& tau,
+const Eigen::VectorXd& aba(const Model& model,
+                           Data& data,
+                           const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& v,
+                           const Eigen::VectorXd& tau,
                            const std::vector<Force>& f_ext) {
   return aba_impl(model, data, q, v, tau, &f_ext);
 }

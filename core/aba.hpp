@@ -13,12 +13,18 @@ namespace core {
 /// generalized to multi-DOF joints; cross-checked against crba()/rnea() in
 /// tests/core/dynamics_test.cpp (Aba.InvertsRnea, Aba.EqualsInverseInertiaTimesTauMinusBias).
 /// @return data.ddq (nv)
-const Eigen::VectorXd& aba(const Model& model, Data& data, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& v, const Eigen::VectorXd& tau);
+const Eigen::VectorXd& aba(const Model& model,
+                           Data& data,
+                           const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& v,
+                           const Eigen::VectorXd& tau);
 
 /// The same with external forces f_ext[i] on link i, in link i's frame (njoints entries).
-const Eigen::VectorXd& aba(const Model& model, Data& data, const Eigen::VectorXd& q,
-                           const Eigen::VectorXd& v, const Eigen::VectorXd& tau,
+const Eigen::VectorXd& aba(const Model& model,
+                           Data& data,
+                           const Eigen::VectorXd& q,
+                           const Eigen::VectorXd& v,
+                           const Eigen::VectorXd& tau,
                            const std::vector<Force>& f_ext);
 
 }  // namespace core

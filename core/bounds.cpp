@@ -32,7 +32,8 @@ void add_shape(const Transform& X_WS, const Geometry& g, Bounds& b) {
       }
       break;
     }
-    case Geometry::Shape::kMesh: break;
+    case Geometry::Shape::kMesh:
+      break;
   }
 }
 }  // namespace

@@ -8,7 +8,10 @@
 
 namespace core {
 
-void interpolate(const Model& model, const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, double s,
+void interpolate(const Model& model,
+                 const Eigen::VectorXd& q0,
+                 const Eigen::VectorXd& q1,
+                 double s,
                  Eigen::VectorXd& q_out) {
   if (s == 0.0) {
     q_out = q0;
@@ -22,12 +25,16 @@ void interpolate(const Model& model, const Eigen::VectorXd& q0, const Eigen::Vec
   for (int i = 1; i < model.njoints; ++i) {
     const int iq = model.idx_q[i];
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute:
-      case JointType::kPrismatic: q_out[iq] = (1 - s) * q0[iq] + s * q1[iq]; break;
+      case JointType::kPrismatic:
+        q_out[iq] = (1 - s) * q0[iq] + s * q1[iq];
+        break;
       case JointType::kFree:
         q_out.segment<3>(iq) = (1 - s) * q0.segment<3>(iq) + s * q1.segment<3>(iq);
-        set_quaternion_at(q_out, iq + 3, quaternion_at(q0, iq + 3).slerp(s, quaternion_at(q1, iq + 3)));
+        set_quaternion_at(q_out, iq + 3,
+                          quaternion_at(q0, iq + 3).slerp(s, quaternion_at(q1, iq + 3)));
         break;
       case JointType::kSpherical:
         set_quaternion_at(q_out, iq, quaternion_at(q0, iq).slerp(s, quaternion_at(q1, iq)));

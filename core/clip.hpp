@@ -9,8 +9,8 @@
 namespace core {
 
 struct Clip {
-  double frame_time = 1.0 / 30.0;        // seconds per frame (> 0)
-  std::vector<Eigen::VectorXd> frames;   // configurations, nq each
+  double frame_time = 1.0 / 30.0;       // seconds per frame (> 0)
+  std::vector<Eigen::VectorXd> frames;  // configurations, nq each
 
   int size() const { return static_cast<int>(frames.size()); }
   bool empty() const { return frames.empty(); }
@@ -21,7 +21,10 @@ struct Clip {
 
 /// q0 ⊕ s (q1 ⊖ q0): linear in 1-DOF coordinates and positions, slerp on rotations (the shortest
 /// way). s = 0 gives q0 exactly and s = 1 gives q1 (up to the quaternion sign).
-void interpolate(const Model& model, const Eigen::VectorXd& q0, const Eigen::VectorXd& q1, double s,
+void interpolate(const Model& model,
+                 const Eigen::VectorXd& q0,
+                 const Eigen::VectorXd& q1,
+                 double s,
                  Eigen::VectorXd& q_out);
 
 /// The clip's configuration at time t (clamped to [0, duration]), interpolated between frames.

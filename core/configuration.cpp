@@ -25,7 +25,8 @@ Eigen::VectorXd rest_configuration(const Model& model) {
     if (t != JointType::kRevolute && t != JointType::kPrismatic) continue;
     const JointLimits& L = model.limits[i];
     double value = 0;
-    if (std::isfinite(L.lower) && std::isfinite(L.upper)) value = kOffEnd * 0.5 * (L.lower + L.upper);
+    if (std::isfinite(L.lower) && std::isfinite(L.upper))
+      value = kOffEnd * 0.5 * (L.lower + L.upper);
     q[model.idx_q[i]] = std::clamp(value, L.lower, L.upper);
   }
   return q;
@@ -35,16 +36,22 @@ State neutral_state(const Model& model) {
   return {neutral_configuration(model), Eigen::VectorXd::Zero(model.nv)};
 }
 
-void integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double dt,
+void integrate(const Model& model,
+               const Eigen::VectorXd& q,
+               const Eigen::VectorXd& v,
+               double dt,
                Eigen::VectorXd& q_out) {
   if (&q_out != &q) q_out = q;
   for (int i = 1; i < model.njoints; ++i) {
     const int iq = model.idx_q[i];
     const int iv = model.idx_v[i];
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute:
-      case JointType::kPrismatic: q_out[iq] = q[iq] + v[iv] * dt; break;
+      case JointType::kPrismatic:
+        q_out[iq] = q[iq] + v[iv] * dt;
+        break;
       case JointType::kSpherical: {
         // body-frame angular velocity: R ← R exp(ω dt)
         const Quaternion r = quaternion_at(q, iq) * quaternion_exp(v.segment<3>(iv) * dt);
@@ -66,23 +73,30 @@ void integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::Vector
   }
 }
 
-Eigen::VectorXd integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+Eigen::VectorXd integrate(const Model& model,
+                          const Eigen::VectorXd& q,
+                          const Eigen::VectorXd& v,
                           double dt) {
   Eigen::VectorXd out(model.nq);
   integrate(model, q, v, dt, out);
   return out;
 }
 
-void difference(const Model& model, const Eigen::VectorXd& q0, const Eigen::VectorXd& q1,
+void difference(const Model& model,
+                const Eigen::VectorXd& q0,
+                const Eigen::VectorXd& q1,
                 Eigen::VectorXd& v_out) {
   v_out.resize(model.nv);
   for (int i = 1; i < model.njoints; ++i) {
     const int iq = model.idx_q[i];
     const int iv = model.idx_v[i];
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute:
-      case JointType::kPrismatic: v_out[iv] = q1[iq] - q0[iq]; break;
+      case JointType::kPrismatic:
+        v_out[iv] = q1[iq] - q0[iq];
+        break;
       case JointType::kSpherical: {
         const Quaternion r0 = quaternion_at(q0, iq).normalized();
         const Quaternion r1 = quaternion_at(q1, iq).normalized();
@@ -103,7 +117,8 @@ void difference(const Model& model, const Eigen::VectorXd& q0, const Eigen::Vect
   }
 }
 
-Eigen::VectorXd difference(const Model& model, const Eigen::VectorXd& q0,
+Eigen::VectorXd difference(const Model& model,
+                           const Eigen::VectorXd& q0,
                            const Eigen::VectorXd& q1) {
   Eigen::VectorXd v(model.nv);
   difference(model, q0, q1, v);
@@ -141,7 +156,8 @@ Eigen::VectorXd random_configuration(const Model& model, std::uint64_t seed) {
     const int iq = model.idx_q[i];
     const JointLimits& L = model.limits[i];
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute: {
         const bool bounded = std::isfinite(L.lower) && std::isfinite(L.upper);
         q[iq] = bounded ? rng.uniform(L.lower, L.upper)
@@ -153,7 +169,9 @@ Eigen::VectorXd random_configuration(const Model& model, std::uint64_t seed) {
         q[iq] = bounded ? rng.uniform(L.lower, L.upper) : rng.uniform(-1.0, 1.0);
         break;
       }
-      case JointType::kSpherical: set_quaternion_at(q, iq, rng.rotation()); break;
+      case JointType::kSpherical:
+        set_quaternion_at(q, iq, rng.rotation());
+        break;
       case JointType::kFree:
         for (int k = 0; k < 3; ++k) q[iq + k] = rng.uniform(-1.0, 1.0);
         set_quaternion_at(q, iq + 3, rng.rotation());
@@ -166,8 +184,10 @@ Eigen::VectorXd random_configuration(const Model& model, std::uint64_t seed) {
 void normalize(const Model& model, Eigen::VectorXd& q) {
   for (int i = 1; i < model.njoints; ++i) {
     int iq = model.idx_q[i];
-    if (model.joint_type[i] == JointType::kFree) iq += 3;
-    else if (model.joint_type[i] != JointType::kSpherical) continue;
+    if (model.joint_type[i] == JointType::kFree)
+      iq += 3;
+    else if (model.joint_type[i] != JointType::kSpherical)
+      continue;
     set_quaternion_at(q, iq, quaternion_at(q, iq).normalized());
   }
 }

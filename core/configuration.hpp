@@ -29,15 +29,23 @@ State neutral_state(const Model& model);
 Eigen::VectorXd rest_configuration(const Model& model);
 
 /// q_out = q ⊕ v dt on the manifold. q_out may alias q. Allocation-free.
-void integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v, double dt,
+void integrate(const Model& model,
+               const Eigen::VectorXd& q,
+               const Eigen::VectorXd& v,
+               double dt,
                Eigen::VectorXd& q_out);
-Eigen::VectorXd integrate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+Eigen::VectorXd integrate(const Model& model,
+                          const Eigen::VectorXd& q,
+                          const Eigen::VectorXd& v,
                           double dt);
 
 /// v such that integrate(q0, v, 1) == q1 (shortest rotation for spherical and free joints).
-void difference(const Model& model, const Eigen::VectorXd& q0, const Eigen::VectorXd& q1,
+void difference(const Model& model,
+                const Eigen::VectorXd& q0,
+                const Eigen::VectorXd& q1,
                 Eigen::VectorXd& v_out);
-Eigen::VectorXd difference(const Model& model, const Eigen::VectorXd& q0,
+Eigen::VectorXd difference(const Model& model,
+                           const Eigen::VectorXd& q0,
                            const Eigen::VectorXd& q1);
 
 /// A configuration drawn from a seeded generator: 1-DOF joints uniform inside finite limits

@@ -60,7 +60,8 @@ void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   }
 }
 
-void ltdl_solve_lt(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+void ltdl_solve_lt(const Model& model,
+                   const Eigen::Ref<const Eigen::MatrixXd>& L,
                    Eigen::Ref<Eigen::VectorXd> x) {
   for (int k = model.nv - 1; k >= 0; --k) {
     const double xk = x[k];
@@ -69,14 +70,16 @@ void ltdl_solve_lt(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& 
   }
 }
 
-void ltdl_solve_l(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+void ltdl_solve_l(const Model& model,
+                  const Eigen::Ref<const Eigen::MatrixXd>& L,
                   Eigen::Ref<Eigen::VectorXd> x) {
   for (int k = 0; k < model.nv; ++k) {
     for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[k] -= L(k, i) * x[i];
   }
 }
 
-void ltdl_solve(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& L,
+void ltdl_solve(const Model& model,
+                const Eigen::Ref<const Eigen::MatrixXd>& L,
                 Eigen::Ref<Eigen::VectorXd> x) {
   // H⁻¹ = L⁻¹ D⁻¹ L⁻ᵀ
   ltdl_solve_lt(model, L, x);
@@ -97,7 +100,8 @@ void solve_mass_matrix(const Model& model, const Data& data, Eigen::Ref<Eigen::V
   ltdl_solve(model, data.LTDL, b);
 }
 
-void solve_mass_matrix_columns(const Model& model, const Data& data,
+void solve_mass_matrix_columns(const Model& model,
+                               const Data& data,
                                Eigen::Ref<Eigen::MatrixXd> B) {
   for (Eigen::Index c = 0; c < B.cols(); ++c) {
     Eigen::Ref<Eigen::VectorXd> col(B.col(c));

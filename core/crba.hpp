@@ -24,13 +24,16 @@ void factorize_mass_matrix(const Model& model, Data& data);
 /// upper triangle is scratch space and is overwritten).
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
 /// x ← H⁻¹ x with a matrix factorized by ltdl_factorize.
-void ltdl_solve(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
+void ltdl_solve(const Model& model,
+                const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
                 Eigen::Ref<Eigen::VectorXd> x);
 /// x ← L⁻¹ x (the last part of ltdl_solve, after the division by D).
-void ltdl_solve_l(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
+void ltdl_solve_l(const Model& model,
+                  const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
                   Eigen::Ref<Eigen::VectorXd> x);
 /// x ← L⁻ᵀ x (the first half of ltdl_solve).
-void ltdl_solve_lt(const Model& model, const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
+void ltdl_solve_lt(const Model& model,
+                   const Eigen::Ref<const Eigen::MatrixXd>& LTDL,
                    Eigen::Ref<Eigen::VectorXd> x);
 
 /// Solves H x = b in place with the factorization (RBDA Table 6.4). Allocation-free.

@@ -25,8 +25,8 @@ struct Data {
   std::vector<Motion> a;       // spatial acceleration for the given joint acceleration (njoints)
 
   // computed by rnea; link-frame coordinates
-  std::vector<Force> f;       // force transmitted through joint i onto link i's subtree (njoints)
-  Eigen::VectorXd tau;        // joint forces                                         (nv)
+  std::vector<Force> f;  // force transmitted through joint i onto link i's subtree (njoints)
+  Eigen::VectorXd tau;   // joint forces                                         (nv)
 
   // computed by crba
   std::vector<SpatialInertia> Ic;  // composite inertia of the subtree of i, link frame (njoints)
@@ -36,27 +36,27 @@ struct Data {
   Eigen::MatrixXd LTDL;  // strictly lower part holds L (unit diagonal), diagonal holds D (nv x nv)
 
   // computed by aba (RBDA Table 7.1); link-frame coordinates
-  std::vector<Matrix6> IA;   // articulated-body inertia                             (njoints)
-  std::vector<Force> pA;     // articulated-body bias force                          (njoints)
-  std::vector<Motion> c;     // velocity-product acceleration v_i × S_i q̇_i          (njoints)
+  std::vector<Matrix6> IA;  // articulated-body inertia                             (njoints)
+  std::vector<Force> pA;    // articulated-body bias force                          (njoints)
+  std::vector<Motion> c;    // velocity-product acceleration v_i × S_i q̇_i          (njoints)
   std::vector<Eigen::Matrix<double, 6, 6>> U;     // IA S, first nv_i columns        (njoints)
   std::vector<Eigen::Matrix<double, 6, 6>> Dinv;  // (Sᵀ IA S)⁻¹, top-left nv_i block (njoints)
   std::vector<Vector6> u;                         // τ − Sᵀ pA, first nv_i entries    (njoints)
-  Eigen::VectorXd ddq;       // joint accelerations                                  (nv)
+  Eigen::VectorXd ddq;  // joint accelerations                                  (nv)
 
   // computed by compute_joint_jacobians; rows [angular; linear]
   Matrix6X J;  // joint motion axes in world axes, referenced at the world origin     (6 x nv)
 
   // computed by center_of_mass
-  double mass = 0;                         // total mass
-  Vector3 com_W = Vector3::Zero();         // centre of mass in the world
-  std::vector<double> subtree_mass;        // mass of the subtree rooted at link i       (njoints)
-  std::vector<Vector3> subtree_h_W;        // its first mass moment Σ m c, world         (njoints)
+  double mass = 0;                   // total mass
+  Vector3 com_W = Vector3::Zero();   // centre of mass in the world
+  std::vector<double> subtree_mass;  // mass of the subtree rooted at link i       (njoints)
+  std::vector<Vector3> subtree_h_W;  // its first mass moment Σ m c, world         (njoints)
   // computed by centroidal_momentum_matrix
   std::vector<SpatialInertia> Ic_W;  // composite inertia of the subtree of i, world frame (njoints)
   Matrix6X Ag;                       // centroidal momentum matrix: h_G = Ag v            (6 x nv)
   // computed by com_jacobian
-  Matrix3X J_com;                          // d com_W / dv                               (3 x nv)
+  Matrix3X J_com;  // d com_W / dv                               (3 x nv)
 };
 
 }  // namespace core

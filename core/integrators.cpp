@@ -2,7 +2,9 @@
 
 namespace core {
 
-void configuration_rate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+void configuration_rate(const Model& model,
+                        const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& v,
                         Eigen::VectorXd& qdot) {
   qdot.setZero(model.nq);
   for (int i = 1; i < model.njoints; ++i) {
@@ -10,10 +12,15 @@ void configuration_rate(const Model& model, const Eigen::VectorXd& q, const Eige
     const int iv = model.idx_v[i];
     int iquat = -1;
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute:
-      case JointType::kPrismatic: qdot[iq] = v[iv]; break;
-      case JointType::kSpherical: iquat = iq; break;
+      case JointType::kPrismatic:
+        qdot[iq] = v[iv];
+        break;
+      case JointType::kSpherical:
+        iquat = iq;
+        break;
       case JointType::kFree: {
         const Quaternion r = quaternion_at(q, iq + 3);
         // the stage quaternion may be slightly off unit length: rotate with its normalized form
@@ -27,7 +34,8 @@ void configuration_rate(const Model& model, const Eigen::VectorXd& q, const Eige
       const Quaternion r = quaternion_at(q, iquat);
       const Quaternion w(0.0, v[iv], v[iv + 1], v[iv + 2]);
       const Quaternion d = r * w;
-      set_quaternion_at(qdot, iquat, Quaternion(0.5 * d.w(), 0.5 * d.x(), 0.5 * d.y(), 0.5 * d.z()));
+      set_quaternion_at(qdot, iquat,
+                        Quaternion(0.5 * d.w(), 0.5 * d.x(), 0.5 * d.y(), 0.5 * d.z()));
     }
   }
 }

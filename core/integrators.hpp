@@ -10,7 +10,9 @@ namespace core {
 
 /// q̇ in configuration coordinates (nq): 1-DOF q̇ = v; spherical q̇ = ½ q ⊗ (0, ω) with ω in the
 /// child frame; free position ṗ = R v_linear, free quaternion as spherical.
-void configuration_rate(const Model& model, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+void configuration_rate(const Model& model,
+                        const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& v,
                         Eigen::VectorXd& qdot);
 
 struct Rk4Workspace {
@@ -21,7 +23,11 @@ struct Rk4Workspace {
 /// quaternion-embedding coordinates and renormalized afterwards (fourth order overall).
 /// accel(q, v, a_out) writes the acceleration (nv).
 template <typename Accel>
-void rk4_step(const Model& model, Eigen::VectorXd& q, Eigen::VectorXd& v, double dt, Accel&& accel,
+void rk4_step(const Model& model,
+              Eigen::VectorXd& q,
+              Eigen::VectorXd& v,
+              double dt,
+              Accel&& accel,
               Rk4Workspace& w) {
   static constexpr double kStage[4] = {0.0, 0.5, 0.5, 1.0};
   for (int s = 0; s < 4; ++s) {

@@ -17,7 +17,8 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
     const int c = model.idx_v[i];
     // a rotation ω about an axis through p moves the world origin with p × ω
     switch (model.joint_type[i]) {
-      case JointType::kFixed: break;
+      case JointType::kFixed:
+        break;
       case JointType::kRevolute: {
         const int k = model.axis_index[i];
         const Vector3 w = k >= 0 ? Vector3(R.col(k)) : Vector3(R * model.axis[i]);
@@ -48,7 +49,10 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
   return J;
 }
 
-void point_jacobian(const Model& model, const Data& data, int link, const Vector3& p_LinkPoint,
+void point_jacobian(const Model& model,
+                    const Data& data,
+                    int link,
+                    const Vector3& p_LinkPoint,
                     FrameJacobian& J_out) {
   J_out.angular.setZero(3, model.nv);
   J_out.linear.setZero(3, model.nv);
@@ -64,7 +68,9 @@ void point_jacobian(const Model& model, const Data& data, int link, const Vector
   }
 }
 
-PointMotion point_velocity(const Model& /*model*/, const Data& data, int link,
+PointMotion point_velocity(const Model& /*model*/,
+                           const Data& data,
+                           int link,
                            const Vector3& p_LinkPoint) {
   const Motion& v = data.v[link];
   const Matrix3& R = data.X_W[link].R;
@@ -73,8 +79,7 @@ PointMotion point_velocity(const Model& /*model*/, const Data& data, int link,
 
 namespace {
 // classical acceleration of a body point from a spatial acceleration (link frame)
-PointMotion classical_acceleration(const Data& data, int link, const Motion& a,
-                                   const Vector3& r) {
+PointMotion classical_acceleration(const Data& data, int link, const Motion& a, const Vector3& r) {
   const Motion& v = data.v[link];
   const Matrix3& R = data.X_W[link].R;
   const Vector3 v_point = v.linear + v.angular.cross(r);
@@ -82,12 +87,16 @@ PointMotion classical_acceleration(const Data& data, int link, const Motion& a,
 }
 }  // namespace
 
-PointMotion point_jdot_v(const Model& /*model*/, const Data& data, int link,
+PointMotion point_jdot_v(const Model& /*model*/,
+                         const Data& data,
+                         int link,
                          const Vector3& p_LinkPoint) {
   return classical_acceleration(data, link, data.a_bias[link], p_LinkPoint);
 }
 
-PointMotion point_acceleration(const Model& /*model*/, const Data& data, int link,
+PointMotion point_acceleration(const Model& /*model*/,
+                               const Data& data,
+                               int link,
                                const Vector3& p_LinkPoint) {
   return classical_acceleration(data, link, data.a[link], p_LinkPoint);
 }

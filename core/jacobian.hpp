@@ -35,20 +35,29 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data);
 /// World-aligned Jacobian of the point p_LinkPoint (link frame) on `link`. Allocation-free when
 /// J_out is already sized (3 x nv).
 /// Requires: compute_joint_jacobians(model, data, q).
-void point_jacobian(const Model& model, const Data& data, int link, const Vector3& p_LinkPoint,
+void point_jacobian(const Model& model,
+                    const Data& data,
+                    int link,
+                    const Vector3& p_LinkPoint,
                     FrameJacobian& J_out);
 
 /// Velocity of a point on a link. Requires: forward_kinematics(model, data, q, v).
-PointMotion point_velocity(const Model& model, const Data& data, int link,
+PointMotion point_velocity(const Model& model,
+                           const Data& data,
+                           int link,
                            const Vector3& p_LinkPoint);
 
 /// J̇·v of a point on a link: its classical acceleration when the joint accelerations are zero.
 /// Requires: forward_kinematics(model, data, q, v).
-PointMotion point_jdot_v(const Model& model, const Data& data, int link,
+PointMotion point_jdot_v(const Model& model,
+                         const Data& data,
+                         int link,
                          const Vector3& p_LinkPoint);
 
 /// Classical acceleration of a point on a link. Requires: forward_kinematics(model, data, q, v, a).
-PointMotion point_acceleration(const Model& model, const Data& data, int link,
+PointMotion point_acceleration(const Model& model,
+                               const Data& data,
+                               int link,
                                const Vector3& p_LinkPoint);
 
 }  // namespace core

@@ -23,27 +23,32 @@ Transform joint_transform(const Model& model, int i, const Eigen::VectorXd& q) {
   const Transform& X = model.X_PJ[i];
   const int iq = model.idx_q[i];
   switch (model.joint_type[i]) {
-    case JointType::kFixed: return X;
+    case JointType::kFixed:
+      return X;
     case JointType::kRevolute: {
       const int k = model.axis_index[i];
       if (k >= 0) return {rotate_about_axis(X.R, k, q[iq]), X.p};
       return {X.R * Eigen::AngleAxisd(q[iq], model.axis[i]).toRotationMatrix(), X.p};
     }
-    case JointType::kPrismatic: return {X.R, X.p + X.R * (model.axis[i] * q[iq])};
-    case JointType::kSpherical: return {X.R * quaternion_at(q, iq).toRotationMatrix(), X.p};
+    case JointType::kPrismatic:
+      return {X.R, X.p + X.R * (model.axis[i] * q[iq])};
+    case JointType::kSpherical:
+      return {X.R * quaternion_at(q, iq).toRotationMatrix(), X.p};
     case JointType::kFree:
       return {X.R * quaternion_at(q, iq + 3).toRotationMatrix(), X.p + X.R * q.segment<3>(iq)};
   }
   return X;
 }
 
-const std::vector<Transform>& forward_kinematics(const Model& model, Data& data,
+const std::vector<Transform>& forward_kinematics(const Model& model,
+                                                 Data& data,
                                                  const Eigen::VectorXd& q) {
   data.X_W[0] = Transform::Identity();
   for (int i = 1; i < model.njoints; ++i) {
     const Transform& X_WP = data.X_W[model.parent[i]];
     const int k = model.axis_index[i];
-    if (model.joint_type[i] == JointType::kRevolute && k >= 0 && model.placement_is_translation[i]) {
+    if (model.joint_type[i] == JointType::kRevolute && k >= 0 &&
+        model.placement_is_translation[i]) {
       // the common case: a hinge about a frame axis with an unrotated placement; rotate the
       // parent's world axes directly instead of composing two 3×3 rotations
       const double a = q[model.idx_q[i]];
@@ -60,16 +65,23 @@ const std::vector<Transform>& forward_kinematics(const Model& model, Data& data,
 Motion joint_motion(const Model& model, int i, const Eigen::VectorXd& v) {
   const int iv = model.idx_v[i];
   switch (model.joint_type[i]) {
-    case JointType::kFixed: return Motion::Zero();
-    case JointType::kRevolute: return {model.axis[i] * v[iv], Vector3::Zero()};
-    case JointType::kPrismatic: return {Vector3::Zero(), model.axis[i] * v[iv]};
-    case JointType::kSpherical: return {v.segment<3>(iv), Vector3::Zero()};
-    case JointType::kFree: return {v.segment<3>(iv), v.segment<3>(iv + 3)};
+    case JointType::kFixed:
+      return Motion::Zero();
+    case JointType::kRevolute:
+      return {model.axis[i] * v[iv], Vector3::Zero()};
+    case JointType::kPrismatic:
+      return {Vector3::Zero(), model.axis[i] * v[iv]};
+    case JointType::kSpherical:
+      return {v.segment<3>(iv), Vector3::Zero()};
+    case JointType::kFree:
+      return {v.segment<3>(iv), v.segment<3>(iv + 3)};
   }
   return Motion::Zero();
 }
 
-void forward_kinematics(const Model& model, Data& data, const Eigen::VectorXd& q,
+void forward_kinematics(const Model& model,
+                        Data& data,
+                        const Eigen::VectorXd& q,
                         const Eigen::VectorXd& v) {
   forward_kinematics(model, data, q);
   data.v[0] = Motion::Zero();
@@ -83,8 +95,11 @@ void forward_kinematics(const Model& model, Data& data, const Eigen::VectorXd& q
   }
 }
 
-void forward_kinematics(const Model& model, Data& data, const Eigen::VectorXd& q,
-                        const Eigen::VectorXd& v, const Eigen::VectorXd& a) {
+void forward_kinematics(const Model& model,
+                        Data& data,
+                        const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& v,
+                        const Eigen::VectorXd& a) {
   forward_kinematics(model, data, q, v);
   data.a[0] = Motion::Zero();
   for (int i = 1; i < model.njoints; ++i) {

@@ -13,17 +13,23 @@ Transform joint_transform(const Model& model, int i, const Eigen::VectorXd& q);
 
 /// World poses of all links.
 /// @return data.X_W (njoints); also fills data.X_P
-const std::vector<Transform>& forward_kinematics(const Model& model, Data& data,
+const std::vector<Transform>& forward_kinematics(const Model& model,
+                                                 Data& data,
                                                  const Eigen::VectorXd& q);
 
 /// Poses and spatial velocities (data.v), and the velocity-product accelerations at zero joint
 /// acceleration (data.a_bias, the J̇v term). RBDA Table 3.1 first pass.
-void forward_kinematics(const Model& model, Data& data, const Eigen::VectorXd& q,
+void forward_kinematics(const Model& model,
+                        Data& data,
+                        const Eigen::VectorXd& q,
                         const Eigen::VectorXd& v);
 
 /// As above, plus the spatial accelerations for joint acceleration a (data.a).
-void forward_kinematics(const Model& model, Data& data, const Eigen::VectorXd& q,
-                        const Eigen::VectorXd& v, const Eigen::VectorXd& a);
+void forward_kinematics(const Model& model,
+                        Data& data,
+                        const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& v,
+                        const Eigen::VectorXd& a);
 
 /// Spatial velocity (link frame) contributed by the joint's own velocity: S_i v_i.
 Motion joint_motion(const Model& model, int i, const Eigen::VectorXd& v);

@@ -6,11 +6,16 @@ namespace core {
 
 const char* to_string(JointType t) {
   switch (t) {
-    case JointType::kFixed: return "fixed";
-    case JointType::kRevolute: return "revolute";
-    case JointType::kPrismatic: return "prismatic";
-    case JointType::kSpherical: return "spherical";
-    case JointType::kFree: return "free";
+    case JointType::kFixed:
+      return "fixed";
+    case JointType::kRevolute:
+      return "revolute";
+    case JointType::kPrismatic:
+      return "prismatic";
+    case JointType::kSpherical:
+      return "spherical";
+    case JointType::kFree:
+      return "free";
   }
   return "?";
 }
@@ -25,11 +30,16 @@ std::optional<JointType> joint_type_from_string(std::string_view s) {
 
 const char* to_string(Geometry::Shape s) {
   switch (s) {
-    case Geometry::Shape::kCapsule: return "capsule";
-    case Geometry::Shape::kSphere: return "sphere";
-    case Geometry::Shape::kBox: return "box";
-    case Geometry::Shape::kCylinder: return "cylinder";
-    case Geometry::Shape::kMesh: return "mesh";
+    case Geometry::Shape::kCapsule:
+      return "capsule";
+    case Geometry::Shape::kSphere:
+      return "sphere";
+    case Geometry::Shape::kBox:
+      return "box";
+    case Geometry::Shape::kCylinder:
+      return "cylinder";
+    case Geometry::Shape::kMesh:
+      return "mesh";
   }
   return "?";
 }
@@ -74,11 +84,11 @@ bool Model::operator==(const Model& o) const {
   }
   return name == o.name && njoints == o.njoints && nq == o.nq && nv == o.nv &&
          gravity == o.gravity && parent == o.parent && subtree_end == o.subtree_end &&
-         link_name == o.link_name && joint_name == o.joint_name &&
-         display_name == o.display_name && joint_type == o.joint_type && X_PJ == o.X_PJ &&
-         axis == o.axis && axis_index == o.axis_index &&
-         placement_is_translation == o.placement_is_translation && idx_q == o.idx_q && idx_v == o.idx_v &&
-         limits == o.limits && spherical_range == o.spherical_range && range_inner == o.range_inner &&
+         link_name == o.link_name && joint_name == o.joint_name && display_name == o.display_name &&
+         joint_type == o.joint_type && X_PJ == o.X_PJ && axis == o.axis &&
+         axis_index == o.axis_index && placement_is_translation == o.placement_is_translation &&
+         idx_q == o.idx_q && idx_v == o.idx_v && limits == o.limits &&
+         spherical_range == o.spherical_range && range_inner == o.range_inner &&
          ik_weight == o.ik_weight && ik_gain == o.ik_gain && inertia == o.inertia &&
          collision == o.collision && visual == o.visual && joint_of_v == o.joint_of_v &&
          parent_v == o.parent_v;

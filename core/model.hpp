@@ -21,21 +21,29 @@ enum class JointType { kFixed, kRevolute, kPrismatic, kSpherical, kFree };
 
 constexpr int joint_nq(JointType t) {
   switch (t) {
-    case JointType::kFixed: return 0;
+    case JointType::kFixed:
+      return 0;
     case JointType::kRevolute:
-    case JointType::kPrismatic: return 1;
-    case JointType::kSpherical: return 4;
-    case JointType::kFree: return 7;
+    case JointType::kPrismatic:
+      return 1;
+    case JointType::kSpherical:
+      return 4;
+    case JointType::kFree:
+      return 7;
   }
   return 0;
 }
 constexpr int joint_nv(JointType t) {
   switch (t) {
-    case JointType::kFixed: return 0;
+    case JointType::kFixed:
+      return 0;
     case JointType::kRevolute:
-    case JointType::kPrismatic: return 1;
-    case JointType::kSpherical: return 3;
-    case JointType::kFree: return 6;
+    case JointType::kPrismatic:
+      return 1;
+    case JointType::kSpherical:
+      return 3;
+    case JointType::kFree:
+      return 6;
   }
   return 0;
 }
@@ -122,11 +130,11 @@ struct Model {
   std::vector<Vector3> axis;    // unit axis in the joint frame (revolute, prismatic)
   std::vector<int> axis_index;  // 0, 1, 2 when axis is +x, +y, +z exactly, else -1 (fast paths)
   std::vector<char> placement_is_translation;  // X_PJ.R is exactly the identity (fast paths)
-  std::vector<int> idx_q;       // first configuration coordinate of each joint
-  std::vector<int> idx_v;       // first velocity coordinate of each joint
+  std::vector<int> idx_q;                      // first configuration coordinate of each joint
+  std::vector<int> idx_v;                      // first velocity coordinate of each joint
   std::vector<JointLimits> limits;
   std::vector<SphericalRange> spherical_range;
-  std::vector<RangeInnerBounds> range_inner;    // derived from spherical_range
+  std::vector<RangeInnerBounds> range_inner;     // derived from spherical_range
   std::vector<Quaternion> standard_orientation;  // rest orientation of spherical joints
   std::vector<double> ik_weight;                 // relative cost of moving the joint in IK
   std::vector<std::optional<double>> ik_gain;    // feedback gain (1/s); empty: solver default

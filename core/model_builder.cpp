@@ -1,11 +1,11 @@
 #include "core/model_builder.hpp"
 
-#include "core/swing_twist.hpp"
-
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <sstream>
 #include <unordered_map>
+
+#include "core/swing_twist.hpp"
 
 namespace core {
 
@@ -48,7 +48,8 @@ bool is_rotation(const Matrix3& R) {
 }
 
 void check_inertia(const LinkSpec& l, Checker& c) {
-  if (!std::isfinite(l.mass)) c.link(l.name, "mass is not finite (rule: mass must be finite)");
+  if (!std::isfinite(l.mass))
+    c.link(l.name, "mass is not finite (rule: mass must be finite)");
   else if (l.mass < 0)
     c.link(l.name, "mass " + num(l.mass) + " is negative (rule: mass must be >= 0)");
   if (!finite(l.com)) c.link(l.name, "centre of mass is not finite");
@@ -76,17 +77,19 @@ void check_inertia(const LinkSpec& l, Checker& c) {
   }
 }
 
-void check_geometry(const std::string& link, const std::vector<Geometry>& shapes,
-                    const char* kind, Checker& c) {
+void check_geometry(const std::string& link,
+                    const std::vector<Geometry>& shapes,
+                    const char* kind,
+                    Checker& c) {
   for (size_t k = 0; k < shapes.size(); ++k) {
     const Geometry& g = shapes[k];
-    const std::string where = std::string(kind) + " shape " + std::to_string(k) + " (" +
-                              to_string(g.shape) + "): ";
+    const std::string where =
+        std::string(kind) + " shape " + std::to_string(k) + " (" + to_string(g.shape) + "): ";
     if (!is_rotation(g.X_LinkShape.R) || !finite(g.X_LinkShape.p)) {
       c.link(link, where + "pose is not a finite rigid transform");
     }
-    const bool ok_sizes = std::isfinite(g.radius) && std::isfinite(g.length) && finite(g.size) &&
-                          finite(g.scale);
+    const bool ok_sizes =
+        std::isfinite(g.radius) && std::isfinite(g.length) && finite(g.size) && finite(g.scale);
     if (!ok_sizes) {
       c.link(link, where + "dimensions are not finite");
       continue;
@@ -121,8 +124,8 @@ void check_range(const std::string& joint, const SphericalRange& r, Checker& c) 
     return;
   }
   if (r.triangles.size() > static_cast<size_t>(kMaxRangeTriangles)) {
-    c.joint(joint, "range has " + std::to_string(r.triangles.size()) + " triangles (rule: at most " +
-                       std::to_string(kMaxRangeTriangles) + ")");
+    c.joint(joint, "range has " + std::to_string(r.triangles.size()) +
+                       " triangles (rule: at most " + std::to_string(kMaxRangeTriangles) + ")");
     return;
   }
   for (size_t k = 0; k < nvert; ++k) {
@@ -135,8 +138,8 @@ void check_range(const std::string& joint, const SphericalRange& r, Checker& c) 
         c.joint(joint, v + "swing (a_y, a_z) lies outside the unit disk (rule: |a| <= 1)");
       }
       if (r.twist_lower[k] > r.twist_upper[k]) {
-        c.joint(joint, v + "twist lower " + num(r.twist_lower[k]) + " > upper " +
-                           num(r.twist_upper[k]));
+        c.joint(joint,
+                v + "twist lower " + num(r.twist_lower[k]) + " > upper " + num(r.twist_upper[k]));
       }
     }
   }
@@ -224,7 +227,8 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
   for (int i = 0; i < n; ++i) {
     const LinkSpec& l = links_[i];
     joint_names[i] = l.joint.name.empty() ? l.name : l.joint.name;
-    if (l.name.empty()) c.model("link #" + std::to_string(i) + " has an empty name");
+    if (l.name.empty())
+      c.model("link #" + std::to_string(i) + " has an empty name");
     else if (!link_by_name.emplace(l.name, i).second)
       c.link(l.name, "name is used by more than one link (rule: link names are unique)");
     if (!joint_names[i].empty() && !joint_by_name.emplace(joint_names[i], i).second)
@@ -371,8 +375,7 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
     int anc = m->parent[i];
     while (anc > 0 && joint_nv(m->joint_type[anc]) == 0) anc = m->parent[anc];
     const int first = m->idx_v[i];
-    m->parent_v[first] =
-        anc > 0 ? m->idx_v[anc] + joint_nv(m->joint_type[anc]) - 1 : -1;
+    m->parent_v[first] = anc > 0 ? m->idx_v[anc] + joint_nv(m->joint_type[anc]) - 1 : -1;
     for (int d = 0; d < nvi; ++d) {
       m->joint_of_v[first + d] = i;
       if (d > 0) m->parent_v[first + d] = first + d - 1;
@@ -381,7 +384,8 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
   // subtree ranges: in depth-first order a subtree ends where the next non-descendant starts
   for (int i = nj - 1; i >= 0; --i) {
     m->subtree_end[i] = std::max(m->subtree_end[i], i + 1);
-    if (i > 0) m->subtree_end[m->parent[i]] = std::max(m->subtree_end[m->parent[i]], m->subtree_end[i]);
+    if (i > 0)
+      m->subtree_end[m->parent[i]] = std::max(m->subtree_end[m->parent[i]], m->subtree_end[i]);
   }
   return m;
 }

@@ -30,8 +30,8 @@ struct JointSpec {
   Transform X_PJ;  // joint frame in the parent link frame (the link frame is the joint frame)
   Vector3 axis = Vector3::UnitZ();  // revolute and prismatic; normalized by finalize()
   JointLimits limits;
-  SphericalRange range;                                         // spherical only
-  Quaternion standard_orientation = Quaternion::Identity();     // spherical only
+  SphericalRange range;                                      // spherical only
+  Quaternion standard_orientation = Quaternion::Identity();  // spherical only
   double ik_weight = 1.0;
   std::optional<double> ik_gain;
 };
@@ -41,8 +41,8 @@ struct LinkSpec {
   std::string parent;  // empty: attached to the world (the root)
   JointSpec joint;
   double mass = 0;
-  Vector3 com = Vector3::Zero();      // centre of mass in the link frame
-  Matrix3 I_com = Matrix3::Zero();    // rotational inertia about the COM, link-frame axes
+  Vector3 com = Vector3::Zero();    // centre of mass in the link frame
+  Matrix3 I_com = Matrix3::Zero();  // rotational inertia about the COM, link-frame axes
   std::vector<Geometry> collision;
   std::vector<Geometry> visual;
   std::string display_name;

@@ -11,13 +11,17 @@ namespace core {
 /// Column d of S_i.
 inline Motion subspace_column(const Model& model, int i, int d) {
   switch (model.joint_type[i]) {
-    case JointType::kRevolute: return {model.axis[i], Vector3::Zero()};
-    case JointType::kPrismatic: return {Vector3::Zero(), model.axis[i]};
-    case JointType::kSpherical: return {Vector3::Unit(d), Vector3::Zero()};
+    case JointType::kRevolute:
+      return {model.axis[i], Vector3::Zero()};
+    case JointType::kPrismatic:
+      return {Vector3::Zero(), model.axis[i]};
+    case JointType::kSpherical:
+      return {Vector3::Unit(d), Vector3::Zero()};
     case JointType::kFree:
       return d < 3 ? Motion{Vector3::Unit(d), Vector3::Zero()}
                    : Motion{Vector3::Zero(), Vector3::Unit(d - 3)};
-    case JointType::kFixed: break;
+    case JointType::kFixed:
+      break;
   }
   return Motion::Zero();
 }
@@ -26,9 +30,14 @@ inline Motion subspace_column(const Model& model, int i, int d) {
 template <typename Out>
 inline void subspace_transpose(const Model& model, int i, const Force& f, Out&& out) {
   switch (model.joint_type[i]) {
-    case JointType::kFixed: break;
-    case JointType::kRevolute: out[0] = model.axis[i].dot(f.angular); break;
-    case JointType::kPrismatic: out[0] = model.axis[i].dot(f.linear); break;
+    case JointType::kFixed:
+      break;
+    case JointType::kRevolute:
+      out[0] = model.axis[i].dot(f.angular);
+      break;
+    case JointType::kPrismatic:
+      out[0] = model.axis[i].dot(f.linear);
+      break;
     case JointType::kSpherical:
       for (int k = 0; k < 3; ++k) out[k] = f.angular[k];
       break;

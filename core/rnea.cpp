@@ -9,8 +9,11 @@ namespace {
 
 // Shared body of rnea: velocity terms only when `with_velocity`, accelerations only when given.
 template <bool kWithVelocity, bool kWithAcceleration>
-void rnea_passes(const Model& model, Data& data, const Eigen::VectorXd& q,
-                 const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+void rnea_passes(const Model& model,
+                 Data& data,
+                 const Eigen::VectorXd& q,
+                 const Eigen::VectorXd& v,
+                 const Eigen::VectorXd& a,
                  const std::vector<Force>* f_ext) {
   // forward pass: gravity enters as a fictitious upward acceleration of the world (RBDA §5.3)
   data.v[0] = Motion::Zero();
@@ -35,7 +38,8 @@ void rnea_passes(const Model& model, Data& data, const Eigen::VectorXd& q,
   }
   // backward pass: τ_i = S_iᵀ f_i, and the parent carries the child's force
   for (int i = model.njoints - 1; i > 0; --i) {
-    subspace_transpose(model, i, data.f[i], data.tau.segment(model.idx_v[i], joint_nv(model.joint_type[i])));
+    subspace_transpose(model, i, data.f[i],
+                       data.tau.segment(model.idx_v[i], joint_nv(model.joint_type[i])));
     const int p = model.parent[i];
     if (p > 0) data.f[p] += data.X_P[i].act(data.f[i]);
   }
@@ -43,20 +47,28 @@ void rnea_passes(const Model& model, Data& data, const Eigen::VectorXd& q,
 
 }  // namespace
 
-const Eigen::VectorXd& rnea(const Model& model, Data& data, const Eigen::VectorXd& q,
-                            const Eigen::VectorXd& v, const Eigen::VectorXd& a) {
+const Eigen::VectorXd& rnea(const Model& model,
+                            Data& data,
+                            const Eigen::VectorXd& q,
+                            const Eigen::VectorXd& v,
+                            const Eigen::VectorXd& a) {
   rnea_passes<true, true>(model, data, q, v, a, nullptr);
   return data.tau;
 }
 
-const Eigen::VectorXd& rnea(const Model& model, Data& data, const Eigen::VectorXd& q,
-                            const Eigen::VectorXd& v, const Eigen::VectorXd& a,
+const Eigen::VectorXd& rnea(const Model& model,
+                            Data& data,
+                            const Eigen::VectorXd& q,
+                            const Eigen::VectorXd& v,
+                            const Eigen::VectorXd& a,
                             const std::vector<Force>& f_ext) {
   rnea_passes<true, true>(model, data, q, v, a, &f_ext);
   return data.tau;
 }
 
-const Eigen::VectorXd& bias_forces(const Model& model, Data& data, const Eigen::VectorXd& q,
+const Eigen::VectorXd& bias_forces(const Model& model,
+                                   Data& data,
+                                   const Eigen::VectorXd& q,
                                    const Eigen::VectorXd& v) {
   rnea_passes<true, false>(model, data, q, v, v, nullptr);
   return data.tau;
@@ -67,8 +79,8 @@ const Eigen::VectorXd& gravity_forces(const Model& model, Data& data, const Eige
   return data.tau;
 }
 
-Force link_force_from_world(const Data& data, int link, const Vector3& f_W, const Vector3& p_W,
-                            const Vector3& moment_W) {
+Force link_force_from_world(
+    const Data& data, int link, const Vector3& f_W, const Vector3& p_W, const Vector3& moment_W) {
   // world wrench about the world origin, then into the link frame
   const Force f_world{moment_W + p_W.cross(f_W), f_W};
   return data.X_W[link].act_inverse(f_world);

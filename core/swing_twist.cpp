@@ -1,8 +1,8 @@
 #include "core/swing_twist.hpp"
 
 #include <algorithm>
-#include <map>
 #include <cmath>
+#include <map>
 #include <numbers>
 
 namespace core {
@@ -18,8 +18,10 @@ double wrap_angle(double x) {
 }
 
 // distance from point p to triangle abc in the plane, and barycentric coordinates
-double point_triangle_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                               const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+double point_triangle_distance(const Eigen::Vector2d& p,
+                               const Eigen::Vector2d& a,
+                               const Eigen::Vector2d& b,
+                               const Eigen::Vector2d& c) {
   auto seg = [&](const Eigen::Vector2d& s0, const Eigen::Vector2d& s1) {
     const Eigen::Vector2d d = s1 - s0;
     const double t = std::clamp((p - s0).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
@@ -28,8 +30,11 @@ double point_triangle_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& 
   return std::min({seg(a, b), seg(b, c), seg(c, a)});
 }
 
-bool barycentric(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                 const Eigen::Vector2d& c, Eigen::Vector3d& lambda) {
+bool barycentric(const Eigen::Vector2d& p,
+                 const Eigen::Vector2d& a,
+                 const Eigen::Vector2d& b,
+                 const Eigen::Vector2d& c,
+                 Eigen::Vector3d& lambda) {
   const Eigen::Vector2d e1 = b - a, e2 = c - a, d = p - a;
   const double det = e1.x() * e2.y() - e1.y() * e2.x();
   const double l1 = (d.x() * e2.y() - d.y() * e2.x()) / det;
@@ -184,7 +189,8 @@ RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st) {
 SphericalRange directional_range(const std::vector<double>& psi,
                                  const std::vector<double>& swing_max,
                                  const std::vector<double>& twist_lower,
-                                 const std::vector<double>& twist_upper, double centre_twist_lower,
+                                 const std::vector<double>& twist_upper,
+                                 double centre_twist_lower,
                                  double centre_twist_upper) {
   SphericalRange r;
   const int n = static_cast<int>(psi.size());
@@ -200,8 +206,7 @@ SphericalRange directional_range(const std::vector<double>& psi,
   return r;
 }
 
-SphericalRange cone_range(double swing_max, double twist_lower, double twist_upper,
-                          int segments) {
+SphericalRange cone_range(double swing_max, double twist_lower, double twist_upper, int segments) {
   std::vector<double> psi, swing, lo, hi;
   for (int k = 0; k < segments; ++k) {
     psi.push_back(2 * kPi * k / segments);

@@ -32,10 +32,10 @@ Eigen::Vector2d swing_toward(double psi, double phi);
 
 struct RangeStatus {
   bool inside = true;
-  int triangle = -1;         // a triangle containing the swing, or -1 when the swing is outside
-  double twist_lower = 0;    // interpolated twist limits in that triangle
+  int triangle = -1;       // a triangle containing the swing, or -1 when the swing is outside
+  double twist_lower = 0;  // interpolated twist limits in that triangle
   double twist_upper = 0;
-  double violation = 0;      // how far outside the range (rad, 0 inside): swing or twist excess
+  double violation = 0;  // how far outside the range (rad, 0 inside): swing or twist excess
 };
 
 /// The range test of Yamane §8.3.5: the swing must lie in a triangle, and the twist between the
@@ -53,7 +53,9 @@ RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st);
 
 /// A cone of half-angle swing_max around the nominal direction with a constant twist interval,
 /// authored as a triangle fan of `segments` triangles.
-SphericalRange cone_range(double swing_max, double twist_lower, double twist_upper,
+SphericalRange cone_range(double swing_max,
+                          double twist_lower,
+                          double twist_upper,
                           int segments = 12);
 
 /// A fan whose swing limit varies with the tilt direction: swing_max[k] toward direction
@@ -62,7 +64,8 @@ SphericalRange cone_range(double swing_max, double twist_lower, double twist_upp
 SphericalRange directional_range(const std::vector<double>& psi,
                                  const std::vector<double>& swing_max,
                                  const std::vector<double>& twist_lower,
-                                 const std::vector<double>& twist_upper, double centre_twist_lower,
+                                 const std::vector<double>& twist_upper,
+                                 double centre_twist_lower,
                                  double centre_twist_upper);
 
 }  // namespace core

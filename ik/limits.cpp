@@ -21,8 +21,11 @@ bool spherical_in_range(const core::Model& model, int i, const core::Quaternion&
 }
 }  // namespace
 
-void collect_range_violations(const core::Model& model, const Eigen::VectorXd& q,
-                              double limit_gain, double range_gain, std::vector<RangeRow>& rows,
+void collect_range_violations(const core::Model& model,
+                              const Eigen::VectorXd& q,
+                              double limit_gain,
+                              double range_gain,
+                              std::vector<RangeRow>& rows,
                               std::vector<char>& flags) {
   for (int i = 1; i < model.njoints; ++i) {
     const int iq = model.idx_q[i];
@@ -49,9 +52,13 @@ void collect_range_violations(const core::Model& model, const Eigen::VectorXd& q
   }
 }
 
-int collect_range_predictions(const core::Model& model, const Eigen::VectorXd& q,
-                              const Eigen::VectorXd& v, double h, double margin,
-                              std::vector<RangeRow>& rows, std::vector<char>& flags) {
+int collect_range_predictions(const core::Model& model,
+                              const Eigen::VectorXd& q,
+                              const Eigen::VectorXd& v,
+                              double h,
+                              double margin,
+                              std::vector<RangeRow>& rows,
+                              std::vector<char>& flags) {
   int added = 0;
   for (int i = 1; i < model.njoints; ++i) {
     if (flags[i]) continue;

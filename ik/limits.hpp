@@ -23,15 +23,22 @@ struct RangeRow {
 };
 
 /// Appends rows for joints outside their ranges; `flags[joint]` is set for each.
-void collect_range_violations(const core::Model& model, const Eigen::VectorXd& q,
-                              double limit_gain, double range_gain, std::vector<RangeRow>& rows,
+void collect_range_violations(const core::Model& model,
+                              const Eigen::VectorXd& q,
+                              double limit_gain,
+                              double range_gain,
+                              std::vector<RangeRow>& rows,
                               std::vector<char>& flags);
 
 /// Appends rows for joints (not yet flagged) that q ⊕ h v would carry outside their ranges.
 /// Returns the number of rows added.
-int collect_range_predictions(const core::Model& model, const Eigen::VectorXd& q,
-                              const Eigen::VectorXd& v, double h, double margin,
-                              std::vector<RangeRow>& rows, std::vector<char>& flags);
+int collect_range_predictions(const core::Model& model,
+                              const Eigen::VectorXd& q,
+                              const Eigen::VectorXd& v,
+                              double h,
+                              double margin,
+                              std::vector<RangeRow>& rows,
+                              std::vector<char>& flags);
 
 /// Largest violation over all joints (rad or m; 0 when every joint is in range).
 double max_range_violation(const core::Model& model, const Eigen::VectorXd& q);

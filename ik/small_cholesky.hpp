@@ -28,7 +28,8 @@ inline bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> A) {
 }
 
 /// B ← L⁻¹ B (forward substitution with the factor's lower triangle).
-inline void forward_substitute(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen::Ref<Eigen::MatrixXd> B) {
+inline void forward_substitute(const Eigen::Ref<const Eigen::MatrixXd>& L,
+                               Eigen::Ref<Eigen::MatrixXd> B) {
   const Eigen::Index m = L.rows();
   for (Eigen::Index c = 0; c < B.cols(); ++c) {
     for (Eigen::Index i = 0; i < m; ++i) {
@@ -40,7 +41,8 @@ inline void forward_substitute(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen
 }
 
 /// B ← (L Lᵀ)⁻¹ B.
-inline void cholesky_solve(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen::Ref<Eigen::MatrixXd> B) {
+inline void cholesky_solve(const Eigen::Ref<const Eigen::MatrixXd>& L,
+                           Eigen::Ref<Eigen::MatrixXd> B) {
   forward_substitute(L, B);
   const Eigen::Index m = L.rows();
   for (Eigen::Index c = 0; c < B.cols(); ++c) {

@@ -7,23 +7,29 @@ namespace ik {
 
 const char* to_string(DampingSchedule s) {
   switch (s) {
-    case DampingSchedule::kConstant: return "constant";
-    case DampingSchedule::kManipulability: return "manipulability";
-    case DampingSchedule::kResidual: return "residual";
+    case DampingSchedule::kConstant:
+      return "constant";
+    case DampingSchedule::kManipulability:
+      return "manipulability";
+    case DampingSchedule::kResidual:
+      return "residual";
   }
   return "?";
 }
 
 std::optional<DampingSchedule> damping_schedule_from_string(std::string_view s) {
-  for (DampingSchedule d : {DampingSchedule::kConstant, DampingSchedule::kManipulability, DampingSchedule::kResidual}) {
+  for (DampingSchedule d :
+       {DampingSchedule::kConstant, DampingSchedule::kManipulability, DampingSchedule::kResidual}) {
     if (s == to_string(d)) return d;
   }
   return std::nullopt;
 }
 
 SrInverse::Result SrInverse::solve(const Eigen::Ref<const Eigen::MatrixXd>& A,
-                                   const Eigen::Ref<const Eigen::VectorXd>& b, double damping,
-                                   DampingSchedule schedule, double threshold,
+                                   const Eigen::Ref<const Eigen::VectorXd>& b,
+                                   double damping,
+                                   DampingSchedule schedule,
+                                   double threshold,
                                    Eigen::Ref<Eigen::VectorXd> x) {
   const Eigen::Index m = A.rows(), n = A.cols();
   Result result;

@@ -26,14 +26,18 @@ std::optional<DampingSchedule> damping_schedule_from_string(std::string_view s);
 class SrInverse {
  public:
   struct Result {
-    double damping = 0;          // the k actually used
-    double manipulability = 0;   // w = det(Gram)^(1/2r), geometric mean of singular values
+    double damping = 0;         // the k actually used
+    double manipulability = 0;  // w = det(Gram)^(1/2r), geometric mean of singular values
   };
 
   /// x (n) = A* b; A is m x n. With kManipulability, k0 = damping and w0 = threshold; with
   /// kResidual, k = damping min(1, |b|²/threshold²).
-  Result solve(const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& b,
-               double damping, DampingSchedule schedule, double threshold, Eigen::Ref<Eigen::VectorXd> x);
+  Result solve(const Eigen::Ref<const Eigen::MatrixXd>& A,
+               const Eigen::Ref<const Eigen::VectorXd>& b,
+               double damping,
+               DampingSchedule schedule,
+               double threshold,
+               Eigen::Ref<Eigen::VectorXd> x);
 
  private:
   // capacity grows to the largest problem; smaller problems use the top-left corner

@@ -75,5 +75,4 @@ void write_file_atomically(const std::string& path, const void* bytes, std::size
   }
 }
 
-
 }  // namespace io

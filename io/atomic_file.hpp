@@ -1,10 +1,10 @@
 // Writing a file so that readers see either the old contents or the new, never a torn file.
 #pragma once
 
-#include "io/core_names.hpp"
-
 #include <cstddef>
 #include <string>
+
+#include "io/core_names.hpp"
 
 namespace io {
 

@@ -15,7 +15,8 @@ using namespace core;  // io reads and writes core's types
 
 std::vector<BundledCharacter> bundled_characters() {
   return {
-      {"human48", "human figure, 48 DOF: spherical waist, chest, neck, shoulders, wrists, hips, ankles"},
+      {"human48",
+       "human figure, 48 DOF: spherical waist, chest, neck, shoulders, wrists, hips, ankles"},
       {"human34", "human figure, 34 DOF (HeiMan-like, Felis et al.)"},
       {"arm7", "7-DOF fixed-base arm"},
       {"manipulator5", "5-DOF heavy hydraulic manipulator (Newton-Euler example)"},

@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "io/model_file.hpp"
 #include "io/core_names.hpp"
+#include "io/model_file.hpp"
 
 namespace io {
 

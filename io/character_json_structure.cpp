@@ -53,8 +53,8 @@ std::vector<long> check_parents(CharacterReader& rd,
     const auto it = by_name.find(l.parent);
     const std::string p = json_pointer(info[k].ptr, "parent");
     if (it == by_name.end()) {
-      rd.fail_at(p,
-                 "parent link " + in_quotes(l.parent) + " does not exist (rule: parents are links)");
+      rd.fail_at(
+          p, "parent link " + in_quotes(l.parent) + " does not exist (rule: parents are links)");
     } else if (it->second == k) {
       rd.fail_at(p, "link " + in_quotes(l.name) + " is its own parent (rule: no cycles)");
     } else {
@@ -66,9 +66,9 @@ std::vector<long> check_parents(CharacterReader& rd,
   }
   for (std::size_t r = 1; r < roots.size(); ++r) {
     rd.fail_at(json_pointer(info[roots[r]].ptr, "parent"),
-               "missing, so link " + in_quotes(links[roots[r]].name) + " is a second root besides " +
-                   info[roots[0]].ptr + " " + in_quotes(links[roots[0]].name) +
-                   " (rule: exactly one link has no parent)");
+               "missing, so link " + in_quotes(links[roots[r]].name) +
+                   " is a second root besides " + info[roots[0]].ptr + " " +
+                   in_quotes(links[roots[0]].name) + " (rule: exactly one link has no parent)");
   }
   return parent;
 }

@@ -13,8 +13,8 @@ std::string read_file(const std::string& path, std::size_t max_bytes, const std:
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec || !fs::exists(status)) {
-    throw FileError(path + ": cannot open the file: " +
-                    (ec ? ec.message() : std::string("no such file")));
+    throw FileError(path +
+                    ": cannot open the file: " + (ec ? ec.message() : std::string("no such file")));
   }
   if (fs::is_directory(status)) throw FileError(path + ": is a directory, not a file");
   std::ifstream in(path, std::ios::binary);

@@ -19,7 +19,8 @@ class FileError : public std::runtime_error {
 /// message ("a BVH file is at most 268435456 bytes").
 /// @throws FileError "<path>: cannot open the file: <reason>", "<path>: is a directory",
 ///         "<path>: file is N bytes (rule: <what> is at most max_bytes bytes)"
-std::string read_file(const std::string& path, std::size_t max_bytes,
+std::string read_file(const std::string& path,
+                      std::size_t max_bytes,
                       const std::string& what = "a file");
 
 }  // namespace io

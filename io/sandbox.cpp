@@ -13,8 +13,8 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <new>
 
@@ -78,14 +78,17 @@ void close_inherited(int keep) {
 // AddressSanitizer's allocator cannot return null to operator new: when the address-space limit
 // stops it, it reports "out-of-memory" and dies. Report that as the out-of-memory status.
 void on_sanitizer_death() {
-  if (__asan_report_present() && std::strcmp(__asan_get_report_description(), "out-of-memory") == 0) {
+  if (__asan_report_present() &&
+      std::strcmp(__asan_get_report_description(), "out-of-memory") == 0) {
     ::_exit(kSandboxOutOfMemory);
   }
 }
 #endif
 
-[[noreturn]] void child_main(const std::function<int(int)>& work, const SandboxLimits& limits,
-                             int fd, pid_t parent) {
+[[noreturn]] void child_main(const std::function<int(int)>& work,
+                             const SandboxLimits& limits,
+                             int fd,
+                             pid_t parent) {
   // die with the parent; if it is already gone, do not start
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (::getppid() != parent) ::_exit(kSandboxUncaughtException);
@@ -159,7 +162,7 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
   const pid_t parent = ::getpid();
   const auto deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                  std::chrono::duration<double>(std::max(0.0, limits.timeout_seconds)));
+                         std::chrono::duration<double>(std::max(0.0, limits.timeout_seconds)));
   const pid_t pid = ::fork();
   if (pid < 0) {
     result.message = std::string("cannot start a child process: ") + std::strerror(errno);
@@ -174,7 +177,8 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
   bool timed_out = false, too_large = false;
   char buf[1 << 16];
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0) {
       timed_out = true;
       break;
@@ -229,13 +233,13 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
     result.message = "wrote more than " + mib(limits.max_reply_bytes) + " of results; stopped";
   } else if (timed_out) {
     result.status = SandboxStatus::kTimeout;
-    result.message = "did not finish within " + seconds(limits.timeout_seconds) +
-                     " of wall-clock time; stopped";
+    result.message =
+        "did not finish within " + seconds(limits.timeout_seconds) + " of wall-clock time; stopped";
   } else if (result.signal == SIGXCPU ||
              (result.signal == SIGKILL && cpu >= std::max(1, limits.cpu_seconds))) {
     result.status = SandboxStatus::kCpuLimit;
-    result.message = "exceeded its CPU time limit of " +
-                     seconds(std::max(1, limits.cpu_seconds)) + "; stopped";
+    result.message =
+        "exceeded its CPU time limit of " + seconds(std::max(1, limits.cpu_seconds)) + "; stopped";
   } else if (result.exit_status == kSandboxOutOfMemory) {
     result.status = SandboxStatus::kMemoryLimit;
     result.message = "ran out of memory under its limit of " + mib(limits.memory_bytes);

@@ -18,18 +18,18 @@
 // deadlocks anyway is killed at the deadline.
 #pragma once
 
-#include "io/core_names.hpp"
-
 #include <cstddef>
 #include <functional>
 #include <string>
+
+#include "io/core_names.hpp"
 
 namespace io {
 
 struct SandboxLimits {
   std::size_t memory_bytes = std::size_t{512} << 20;  // address space beyond the inherited one
-  int cpu_seconds = 20;                                // CPU time (soft limit; hard = soft + 1)
-  double timeout_seconds = 60;                         // wall clock, from fork to exit
+  int cpu_seconds = 20;                               // CPU time (soft limit; hard = soft + 1)
+  double timeout_seconds = 60;                        // wall clock, from fork to exit
   std::size_t max_reply_bytes = std::size_t{256} << 20;
 };
 
@@ -45,8 +45,9 @@ enum class SandboxStatus {
 
 struct SandboxResult {
   SandboxStatus status = SandboxStatus::kStartFailed;
-  std::string reply;    // everything the child wrote (complete only for kOk)
-  std::string message;  // what happened, for kOk empty: e.g. "crashed (signal 11, Segmentation fault)"
+  std::string reply;  // everything the child wrote (complete only for kOk)
+  std::string
+      message;  // what happened, for kOk empty: e.g. "crashed (signal 11, Segmentation fault)"
   int exit_status = -1;  // exit status, or -1 when killed by a signal
   int signal = 0;        // terminating signal, or 0
 };

@@ -77,7 +77,8 @@ bool is_state_changing(const std::string& method) {
 }
 
 // The session named in the path, checked against the token header; answers 401/404 itself.
-std::shared_ptr<SessionActor> session_of(const RouteContext& ctx, const httplib::Request& req,
+std::shared_ptr<SessionActor> session_of(const RouteContext& ctx,
+                                         const httplib::Request& req,
                                          httplib::Response& res) {
   const std::string id = req.matches[1];
   if (!is_valid_id(id)) {
@@ -86,11 +87,13 @@ std::shared_ptr<SessionActor> session_of(const RouteContext& ctx, const httplib:
   }
   const SessionLookup found = ctx.registry->find(id, req.get_header_value(kTokenHeader));
   if (found.status == 404) send_error(res, 404, "id: no such session");
-  if (found.status == 401) send_error(res, 401, std::string(kTokenHeader) + ": missing or wrong session token");
+  if (found.status == 401)
+    send_error(res, 401, std::string(kTokenHeader) + ": missing or wrong session token");
   return found.actor;
 }
 
-std::optional<int> int_param(const httplib::Request& req, const char* name, httplib::Response& res, int lo, int hi) {
+std::optional<int> int_param(
+    const httplib::Request& req, const char* name, httplib::Response& res, int lo, int hi) {
   if (!req.has_param(name)) return std::nullopt;
   const std::string text = req.get_param_value(name);
   int value = 0;
@@ -101,8 +104,9 @@ std::optional<int> int_param(const httplib::Request& req, const char* name, http
     used = 0;
   }
   if (used == 0 || used != text.size() || value < lo || value > hi) {
-    send_error(res, 400, std::string(name) + ": must be an integer in [" + std::to_string(lo) + ", " +
-                             std::to_string(hi) + "]");
+    send_error(res, 400,
+               std::string(name) + ": must be an integer in [" + std::to_string(lo) + ", " +
+                   std::to_string(hi) + "]");
     throw std::invalid_argument(name);
   }
   return value;
@@ -116,16 +120,17 @@ void register_static(httplib::Server& http, const RouteContext& ctx) {
     if (!index) return send_error(res, 404, "index.html: " + why);
     send_file(res, *index);
   });
-  http.Get(R"(/vendor/three/(.*))", [web_root](const httplib::Request& req, httplib::Response& res) {
-    const std::string rest = req.matches[1];
-    if (rest.rfind("build/", 0) != 0 && rest.rfind("examples/jsm/", 0) != 0) {
-      return send_error(res, 404, "path: /vendor/three/ serves build/ and examples/jsm/ only");
-    }
-    std::string why;
-    const auto file = resolve_static_path(web_root / "node_modules" / "three", rest, {}, &why);
-    if (!file) return send_error(res, 404, "path: " + why);
-    send_file(res, *file);
-  });
+  http.Get(
+      R"(/vendor/three/(.*))", [web_root](const httplib::Request& req, httplib::Response& res) {
+        const std::string rest = req.matches[1];
+        if (rest.rfind("build/", 0) != 0 && rest.rfind("examples/jsm/", 0) != 0) {
+          return send_error(res, 404, "path: /vendor/three/ serves build/ and examples/jsm/ only");
+        }
+        std::string why;
+        const auto file = resolve_static_path(web_root / "node_modules" / "three", rest, {}, &why);
+        if (!file) return send_error(res, 404, "path: " + why);
+        send_file(res, *file);
+      });
   http.Get(R"(/(.+))", [web_root](const httplib::Request& req, httplib::Response& res) {
     if (req.path.rfind("/api/", 0) == 0) return send_error(res, 404, "path: no such API route");
     std::string why;
@@ -146,13 +151,16 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     send_json(res, 200,
               {{"protocol", kProtocolVersion},
                {"ws_url", "ws://" + host + ":" + std::to_string(ctx.policy->ws_port()) + "/ws"},
-               {"limits", {{"upload_bytes", kMaxUploadBytes}, {"ws_message_bytes", kMaxWsMessageBytes}}}});
+               {"limits",
+                {{"upload_bytes", kMaxUploadBytes}, {"ws_message_bytes", kMaxWsMessageBytes}}}});
   });
   http.Get("/api/characters", [&ctx](const httplib::Request&, httplib::Response& res) {
     json list = json::array();
-    for (const auto& c : io::bundled_characters()) list.push_back({{"name", c.name}, {"description", c.description}});
+    for (const auto& c : io::bundled_characters())
+      list.push_back({{"name", c.name}, {"description", c.description}});
     if (!ctx.served_character_name.empty()) {
-      list.push_back({{"name", ctx.served_character_name}, {"description", "the character this server was started with"}});
+      list.push_back({{"name", ctx.served_character_name},
+                      {"description", "the character this server was started with"}});
     }
     send_json(res, 200, list);
   });
@@ -160,15 +168,20 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     std::unique_ptr<animator::Session> session;
     try {
       if (req.is_multipart_form_data()) {
-        if (!req.has_file("character")) return send_error(res, 400, "character: a file field \"character\" is required");
+        if (!req.has_file("character"))
+          return send_error(res, 400, "character: a file field \"character\" is required");
         const httplib::MultipartFormData file = req.get_file_value("character");
         session = session_from_upload("character", file.filename, file.content, ctx.temp_root);
       } else {
-        if (req.body.size() > kMaxJsonBodyBytes) return send_error(res, 413, "body: larger than 1 MiB");
+        if (req.body.size() > kMaxJsonBodyBytes)
+          return send_error(res, 413, "body: larger than 1 MiB");
         const json body = json::parse(req.body, nullptr, false);
-        if (body.is_discarded() || !body.is_object()) return send_error(res, 400, "body: must be a JSON object");
+        if (body.is_discarded() || !body.is_object())
+          return send_error(res, 400, "body: must be a JSON object");
         if (!body.contains("character") || !body["character"].is_string()) {
-          return send_error(res, 400, "character: a bundled character name is required (see GET /api/characters)");
+          return send_error(
+              res, 400,
+              "character: a bundled character name is required (see GET /api/characters)");
         }
         const std::string name = body["character"];
         if (!ctx.served_character_name.empty() && name == ctx.served_character_name) {
@@ -177,10 +190,13 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         bool bundled = session != nullptr;
         for (const auto& c : io::bundled_characters()) bundled = bundled || c.name == name;
         if (!bundled) {
-          return send_error(res, 400, "character: \"" + safe_file_name(name, "?") +
-                                          "\" is not a bundled character (rule: a name from GET /api/characters; files are uploaded)");
+          return send_error(res, 400,
+                            "character: \"" + safe_file_name(name, "?") +
+                                "\" is not a bundled character (rule: a name from GET "
+                                "/api/characters; files are uploaded)");
         }
-        if (!session) session = std::make_unique<animator::Session>(io::load_character(name).model, name);
+        if (!session)
+          session = std::make_unique<animator::Session>(io::load_character(name).model, name);
       }
       const SessionHandle handle = ctx.registry->create(std::move(session));
       send_json(res, 201, {{"id", handle.id}, {"token", handle.token}});
@@ -196,23 +212,27 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     const std::string id = actor->id();
     send_json(res, 200, actor->call([&id](animator::Session& s) { return snapshot_json(s, id); }));
   });
-  http.Post(R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
-    const auto actor = session_of(ctx, req, res);
-    if (!actor) return;
-    if (!req.is_multipart_form_data() || !req.has_file("clip")) {
-      return send_error(res, 400, "clip: a multipart file field \"clip\" is required");
-    }
-    try {
-      const httplib::MultipartFormData file = req.get_file_value("clip");
-      core::Clip clip = clip_from_upload("clip", file.filename, file.content, actor->model(), ctx.temp_root);
-      const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
-      actor->call([&clip](animator::Session& s) { s.set_clip(std::move(clip), "import clip"); }, /*edit=*/true);
-      send_json(res, 200, answer);
-    } catch (const UploadError& e) {
-      send_error(res, e.status, e.what());
-    }
-  });
-  http.Get(R"(/api/sessions/([^/]+)/export)", [&ctx](const httplib::Request& req, httplib::Response& res) {
+  http.Post(
+      R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
+        const auto actor = session_of(ctx, req, res);
+        if (!actor) return;
+        if (!req.is_multipart_form_data() || !req.has_file("clip")) {
+          return send_error(res, 400, "clip: a multipart file field \"clip\" is required");
+        }
+        try {
+          const httplib::MultipartFormData file = req.get_file_value("clip");
+          core::Clip clip =
+              clip_from_upload("clip", file.filename, file.content, actor->model(), ctx.temp_root);
+          const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
+          actor->call([&clip](animator::Session& s) { s.set_clip(std::move(clip), "import clip"); },
+                      /*edit=*/true);
+          send_json(res, 200, answer);
+        } catch (const UploadError& e) {
+          send_error(res, e.status, e.what());
+        }
+      });
+  http.Get(R"(/api/sessions/([^/]+)/export)", [&ctx](const httplib::Request& req,
+                                                     httplib::Response& res) {
     const auto actor = session_of(ctx, req, res);
     if (!actor) return;
     const std::string format = req.get_param_value("format");
@@ -232,9 +252,11 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       if (format == "bvh") {
         set_uncompressed(res, io::write_bvh(actor->model(), a.clip), "text/plain; charset=utf-8");
       } else if (format == "gltf") {
-        res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}), "model/gltf+json");
+        res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}),
+                        "model/gltf+json");
       } else {
-        const std::vector<std::uint8_t> glb = io::write_glb(actor->model(), &a.clip, a.skin, {.name = a.name});
+        const std::vector<std::uint8_t> glb =
+            io::write_glb(actor->model(), &a.clip, a.skin, {.name = a.name});
         res.set_content(std::string(glb.begin(), glb.end()), "model/gltf-binary");
       }
     } catch (const std::invalid_argument& e) {
@@ -242,65 +264,74 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     }
     res.set_header("Content-Disposition", "attachment; filename=\"" + file_name + "\"");
   });
-  http.Get(R"(/api/sessions/([^/]+)/thumbnail\.png)", [&ctx](const httplib::Request& req, httplib::Response& res) {
-    const auto actor = session_of(ctx, req, res);
-    if (!actor) return;
-    std::optional<int> frame, size;
-    try {
-      frame = int_param(req, "frame", res, 0, 10'000'000);
-      size = int_param(req, "size", res, 16, 1024);
-    } catch (const std::invalid_argument&) {
-      return;
-    }
-    struct Pose {
-      Eigen::VectorXd q;
-      const core::SkinnedMesh* skin;
-      int frames;
-    };
-    const Pose pose = actor->call([&frame](animator::Session& s) {
-      if (!frame) return Pose{s.q(), s.skin(), 0};
-      const core::Clip clip = s.animation_clip();
-      if (*frame >= clip.size()) return Pose{Eigen::VectorXd(), s.skin(), clip.size()};
-      return Pose{clip.frames[static_cast<size_t>(*frame)], s.skin(), clip.size()};
-    });
-    if (pose.q.size() == 0) {
-      return send_error(res, 400, "frame: must be below the animation's " + std::to_string(pose.frames) + " frames");
-    }
+  http.Get(R"(/api/sessions/([^/]+)/thumbnail\.png)",
+           [&ctx](const httplib::Request& req, httplib::Response& res) {
+             const auto actor = session_of(ctx, req, res);
+             if (!actor) return;
+             std::optional<int> frame, size;
+             try {
+               frame = int_param(req, "frame", res, 0, 10'000'000);
+               size = int_param(req, "size", res, 16, 1024);
+             } catch (const std::invalid_argument&) {
+               return;
+             }
+             struct Pose {
+               Eigen::VectorXd q;
+               const core::SkinnedMesh* skin;
+               int frames;
+             };
+             const Pose pose = actor->call([&frame](animator::Session& s) {
+               if (!frame) return Pose{s.q(), s.skin(), 0};
+               const core::Clip clip = s.animation_clip();
+               if (*frame >= clip.size()) return Pose{Eigen::VectorXd(), s.skin(), clip.size()};
+               return Pose{clip.frames[static_cast<size_t>(*frame)], s.skin(), clip.size()};
+             });
+             if (pose.q.size() == 0) {
+               return send_error(res, 400,
+                                 "frame: must be below the animation's " +
+                                     std::to_string(pose.frames) + " frames");
+             }
 #if PINDRAG_HAVE_THUMBNAIL
-    static ThumbnailCache cache;
-    ThumbnailOptions options;
-    options.size = size.value_or(128);
-    options.cache = &cache;
-    try {
-      const std::vector<std::uint8_t> png = render_thumbnail(actor->model(), pose.q, options, pose.skin);
-      res.set_header("Cache-Control", "no-cache");
-      res.set_content(std::string(png.begin(), png.end()), "image/png");
-    } catch (const std::invalid_argument& e) {
-      send_error(res, 400, std::string("thumbnail: ") + e.what());
-    } catch (const std::runtime_error& e) {
-      send_error(res, 503, std::string("thumbnail: ") + e.what());
-    }
+             static ThumbnailCache cache;
+             ThumbnailOptions options;
+             options.size = size.value_or(128);
+             options.cache = &cache;
+             try {
+               const std::vector<std::uint8_t> png =
+                   render_thumbnail(actor->model(), pose.q, options, pose.skin);
+               res.set_header("Cache-Control", "no-cache");
+               res.set_content(std::string(png.begin(), png.end()), "image/png");
+             } catch (const std::invalid_argument& e) {
+               send_error(res, 400, std::string("thumbnail: ") + e.what());
+             } catch (const std::runtime_error& e) {
+               send_error(res, 503, std::string("thumbnail: ") + e.what());
+             }
 #else
-    send_error(res, 501, "thumbnail: this build has no thumbnail renderer");
+             send_error(res, 501, "thumbnail: this build has no thumbnail renderer");
 #endif
-  });
+           });
 }
 
 }  // namespace
 
 void register_routes(httplib::Server& http, const RouteContext& context) {
   const RouteContext& ctx = context;
-  http.set_payload_max_length(kMaxUploadBytes + (std::size_t{1} << 16));  // the file plus its multipart framing
+  http.set_payload_max_length(kMaxUploadBytes +
+                              (std::size_t{1} << 16));  // the file plus its multipart framing
   http.set_keep_alive_timeout(1);  // shutdown waits for idle keep-alive connections
   http.set_pre_routing_handler([&ctx](const httplib::Request& req, httplib::Response& res) {
     if (!ctx.policy->host_allowed(req.get_header_value("Host"), ctx.policy->http_port())) {
-      send_error(res, 403, "Host: not a name of this server (rule: 127.0.0.1, localhost or [::1] with the port)");
+      send_error(
+          res, 403,
+          "Host: not a name of this server (rule: 127.0.0.1, localhost or [::1] with the port)");
       return httplib::Server::HandlerResponse::Handled;
     }
     if (is_state_changing(req.method)) {
       if (req.has_header("Origin")) {
         if (!ctx.policy->origin_allowed(req.get_header_value("Origin"))) {
-          send_error(res, 403, "Origin: not this server's page (rule: exactly " + ctx.policy->page_origin() + ")");
+          send_error(
+              res, 403,
+              "Origin: not this server's page (rule: exactly " + ctx.policy->page_origin() + ")");
           return httplib::Server::HandlerResponse::Handled;
         }
       } else if (req.path == "/api/sessions" && !is_loopback_address(req.remote_addr)) {
@@ -318,18 +349,19 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
                                                  : "request: refused";
     send_error(res, res.status, what);
   });
-  http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
-    std::string what = "internal error";
-    try {
-      if (error) std::rethrow_exception(error);
-    } catch (const animator::SessionError& e) {
-      return send_error(res, 400, e.what());
-    } catch (const std::exception& e) {
-      what = e.what();
-    } catch (...) {
-    }
-    send_error(res, 500, what);
-  });
+  http.set_exception_handler(
+      [](const httplib::Request&, httplib::Response& res, std::exception_ptr error) {
+        std::string what = "internal error";
+        try {
+          if (error) std::rethrow_exception(error);
+        } catch (const animator::SessionError& e) {
+          return send_error(res, 400, e.what());
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        send_error(res, 500, what);
+      });
   register_api(http, ctx);
   register_static(http, ctx);
 }

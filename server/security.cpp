@@ -145,8 +145,10 @@ bool is_valid_id(std::string_view id) {
 }
 
 std::optional<std::filesystem::path> resolve_static_path(
-    const std::filesystem::path& root, std::string_view url_path,
-    const std::vector<std::string>& forbidden_segments, std::string* why) {
+    const std::filesystem::path& root,
+    std::string_view url_path,
+    const std::vector<std::string>& forbidden_segments,
+    std::string* why) {
   namespace fs = std::filesystem;
   auto refuse = [&](const std::string& reason) -> std::optional<fs::path> {
     if (why) *why = reason;
@@ -178,8 +180,8 @@ std::optional<std::filesystem::path> resolve_static_path(
   if (ec) return refuse("the static root does not exist");
   const fs::path candidate = fs::canonical(canonical_root / relative, ec);
   if (ec) return refuse("no such file");
-  const auto [root_end, unused] =
-      std::mismatch(canonical_root.begin(), canonical_root.end(), candidate.begin(), candidate.end());
+  const auto [root_end, unused] = std::mismatch(canonical_root.begin(), canonical_root.end(),
+                                                candidate.begin(), candidate.end());
   (void)unused;
   if (root_end != canonical_root.end()) return refuse("the path leaves the static root");
   if (!fs::is_regular_file(candidate, ec)) return refuse("not a regular file");

@@ -63,8 +63,10 @@ bool is_valid_id(std::string_view id);
 /// is absolute after the leading '/', and anything whose canonical path (symlinks resolved)
 /// lies outside the canonical root or is not a regular file.
 std::optional<std::filesystem::path> resolve_static_path(
-    const std::filesystem::path& root, std::string_view url_path,
-    const std::vector<std::string>& forbidden_segments, std::string* why = nullptr);
+    const std::filesystem::path& root,
+    std::string_view url_path,
+    const std::vector<std::string>& forbidden_segments,
+    std::string* why = nullptr);
 
 /// A name safe as a file name and in Content-Disposition: [A-Za-z0-9._-]{1,64}, other bytes
 /// become '_', no leading dot; `fallback` when nothing remains.

@@ -47,19 +47,23 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
   s.routes.policy = &s.policy;
   s.routes.web_root = options.web_root.empty() ? default_web_root() : options.web_root;
   if (!fs::is_regular_file(fs::path(s.routes.web_root) / "index.html")) {
-    throw std::runtime_error("web root " + s.routes.web_root + ": no index.html there (rule: --web-root names the page's folder)");
+    throw std::runtime_error("web root " + s.routes.web_root +
+                             ": no index.html there (rule: --web-root names the page's folder)");
   }
-  if (!options.data_dir.empty()) s.routes.temp_root = (fs::path(options.data_dir) / "uploads").string();
+  if (!options.data_dir.empty())
+    s.routes.temp_root = (fs::path(options.data_dir) / "uploads").string();
 
   // the character: a bundled name, or a file the operator chose (checked now, loaded per session)
   bool bundled = false;
   for (const auto& c : io::bundled_characters()) bundled = bundled || c.name == options.character;
   if (!bundled) {
     if (!fs::is_regular_file(options.character)) {
-      throw std::runtime_error("--character " + options.character + ": neither a bundled character nor a file");
+      throw std::runtime_error("--character " + options.character +
+                               ": neither a bundled character nor a file");
     }
     session_from_file(options.character, "check");  // throws naming the file when it does not load
-    s.routes.served_character_name = safe_file_name(fs::path(options.character).stem().string(), "character");
+    s.routes.served_character_name =
+        safe_file_name(fs::path(options.character).stem().string(), "character");
     s.routes.served_character_path = fs::absolute(options.character).string();
   }
 
@@ -78,12 +82,14 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
     if (s.http_port < 0) throw std::runtime_error("cannot listen on " + options.host + " (HTTP)");
   } else {
     if (!s.http.bind_to_port(bind_host, options.port)) {
-      throw std::runtime_error("cannot listen on " + options.host + ":" + std::to_string(options.port) +
+      throw std::runtime_error("cannot listen on " + options.host + ":" +
+                               std::to_string(options.port) +
                                " (HTTP; in use by another program?)");
     }
     s.http_port = options.port;
   }
-  const int ws_request = options.ws_port >= 0 ? options.ws_port : (options.port == 0 ? 0 : options.port + 1);
+  const int ws_request =
+      options.ws_port >= 0 ? options.ws_port : (options.port == 0 ? 0 : options.port + 1);
   try {
     s.ws_port = s.ws.bind(bind_host, ws_request);
   } catch (const std::exception& e) {
@@ -103,7 +109,8 @@ void Server::start() {
   s.ws.start();
   s.http_thread = std::thread([&s] { s.http.listen_after_bind(); });
   // httplib's stop() does nothing before the server runs: wait for it, so stop() cannot be lost
-  for (int k = 0; k < 2000 && !s.http.is_running(); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  for (int k = 0; k < 2000 && !s.http.is_running(); ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
 void Server::stop() {

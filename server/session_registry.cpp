@@ -22,7 +22,8 @@ void write_token(const std::string& path, const std::string& token) {
   const std::string temp = path + ".tmp";
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0600);
   if (fd < 0) throw std::system_error(errno, std::generic_category(), temp);
-  const bool ok = ::write(fd, token.data(), token.size()) == static_cast<ssize_t>(token.size()) && ::fsync(fd) == 0;
+  const bool ok = ::write(fd, token.data(), token.size()) == static_cast<ssize_t>(token.size()) &&
+                  ::fsync(fd) == 0;
   ::close(fd);
   if (!ok || ::rename(temp.c_str(), path.c_str()) != 0) {
     throw std::system_error(errno, std::generic_category(), path);
@@ -58,7 +59,8 @@ int SessionRegistry::restore(std::ostream& log) {
       auto session = animator::load_session(path.string());
       auto actor = std::make_shared<SessionActor>(id, std::move(session), path.string());
       std::lock_guard lock(mutex_);
-      if (sessions_.size() >= kMaxSessions) throw TooManySessions("more saved sessions than the server holds");
+      if (sessions_.size() >= kMaxSessions)
+        throw TooManySessions("more saved sessions than the server holds");
       sessions_[id] = SessionHandle{id, token, std::move(actor)};
       ++restored;
     } catch (const std::exception& e) {
@@ -72,7 +74,8 @@ SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session
   {
     std::lock_guard lock(mutex_);
     if (sessions_.size() >= kMaxSessions) {
-      throw TooManySessions("the server holds " + std::to_string(kMaxSessions) + " sessions already");
+      throw TooManySessions("the server holds " + std::to_string(kMaxSessions) +
+                            " sessions already");
     }
   }
   SessionHandle handle{random_hex(16), random_hex(16), nullptr};

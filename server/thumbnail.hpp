@@ -79,7 +79,7 @@ std::vector<std::uint8_t> render_thumbnail(const core::Model& model,
 
 struct ThumbnailCacheStats {
   std::size_t entries = 0;
-  std::size_t bytes = 0;     // PNG bytes plus key bytes of the entries held
+  std::size_t bytes = 0;  // PNG bytes plus key bytes of the entries held
   std::size_t byte_cap = 0;
   std::uint64_t hits = 0;
   std::uint64_t misses = 0;

@@ -20,7 +20,8 @@ namespace {
 
 std::string extension_of(const std::string& file_name) {
   std::string ext = fs::path(file_name).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
@@ -31,10 +32,12 @@ class TempUpload {
     const fs::path root = temp_root.empty() ? fs::temp_directory_path() : fs::path(temp_root);
     fs::create_directories(root);
     std::string pattern = (root / "pindrag-upload-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw std::system_error(errno, std::generic_category(), pattern);
+    if (!::mkdtemp(pattern.data()))
+      throw std::system_error(errno, std::generic_category(), pattern);
     dir_ = pattern;
     file_ = (dir_ / ("upload" + ext)).string();
-    const int fd = ::open(file_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+    const int fd =
+        ::open(file_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
     if (fd < 0) throw std::system_error(errno, std::generic_category(), file_);
     size_t written = 0;
     while (written < bytes.size()) {
@@ -65,8 +68,11 @@ bool is_assimp_format(const std::string& ext) {
 }
 
 // Loader messages name our temporary file; the client knows its own file name.
-std::string rename_source(std::string message, const std::string& temp_file, const std::string& file_name) {
-  for (size_t at = message.find(temp_file); at != std::string::npos; at = message.find(temp_file, at)) {
+std::string rename_source(std::string message,
+                          const std::string& temp_file,
+                          const std::string& file_name) {
+  for (size_t at = message.find(temp_file); at != std::string::npos;
+       at = message.find(temp_file, at)) {
     message.replace(at, temp_file.size(), file_name);
     at += file_name.size();
   }
@@ -74,13 +80,14 @@ std::string rename_source(std::string message, const std::string& temp_file, con
 }
 
 bool same_skeleton(const core::Model& a, const core::Model& b) {
-  return a.njoints == b.njoints && a.nq == b.nq && a.link_name == b.link_name && a.joint_type == b.joint_type &&
-         a.parent == b.parent;
+  return a.njoints == b.njoints && a.nq == b.nq && a.link_name == b.link_name &&
+         a.joint_type == b.joint_type && a.parent == b.parent;
 }
 
 }  // namespace
 
-std::unique_ptr<animator::Session> session_from_file(const std::string& path, const std::string& name) {
+std::unique_ptr<animator::Session> session_from_file(const std::string& path,
+                                                     const std::string& name) {
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
     io::BvhImport imported = io::load_bvh_file(path);
@@ -100,12 +107,16 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path, co
   return std::make_unique<animator::Session>(io::load_model_file(path).model, name);
 }
 
-std::unique_ptr<animator::Session> session_from_upload(const std::string& field, const std::string& file_name,
-                                                       const std::string& bytes, const std::string& temp_root) {
+std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
+                                                       const std::string& file_name,
+                                                       const std::string& bytes,
+                                                       const std::string& temp_root) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".urdf" && ext != ".json" && ext != ".bvh" && !is_assimp_format(ext)) {
-    throw UploadError(415, field + ": \"" + shown + "\": unsupported file type (rule: .urdf, .json, .bvh, .glb, .gltf, .fbx or .dae)");
+    throw UploadError(
+        415, field + ": \"" + shown +
+                 "\": unsupported file type (rule: .urdf, .json, .bvh, .glb, .gltf, .fbx or .dae)");
   }
   if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
   const std::string name = safe_file_name(fs::path(file_name).stem().string(), "character");
@@ -117,12 +128,16 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
   }
 }
 
-core::Clip clip_from_upload(const std::string& field, const std::string& file_name, const std::string& bytes,
-                            const core::Model& model, const std::string& temp_root) {
+core::Clip clip_from_upload(const std::string& field,
+                            const std::string& file_name,
+                            const std::string& bytes,
+                            const core::Model& model,
+                            const std::string& temp_root) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".bvh" && !is_assimp_format(ext)) {
-    throw UploadError(415, field + ": \"" + shown + "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx or .dae)");
+    throw UploadError(415, field + ": \"" + shown +
+                               "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx or .dae)");
   }
   if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
   TempUpload upload(temp_root, ext, bytes);
@@ -135,7 +150,8 @@ core::Clip clip_from_upload(const std::string& field, const std::string& file_na
       clip = std::move(imported.clip);
     } else {
       io::SkinnedImport imported = io::import_skinned_file(upload.file());
-      if (imported.clips.empty()) throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
+      if (imported.clips.empty())
+        throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
       clip_model = imported.model;
       clip = std::move(imported.clips.front().clip);
     }
@@ -145,8 +161,10 @@ core::Clip clip_from_upload(const std::string& field, const std::string& file_na
     throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
   }
   if (!same_skeleton(*clip_model, model)) {
-    throw UploadError(422, field + ": \"" + shown + "\": its skeleton (" + std::to_string(clip_model->nlinks()) +
-                               " links) does not match the session's character (" + std::to_string(model.nlinks()) +
+    throw UploadError(422, field + ": \"" + shown + "\": its skeleton (" +
+                               std::to_string(clip_model->nlinks()) +
+                               " links) does not match the session's character (" +
+                               std::to_string(model.nlinks()) +
                                " links; rule: same link names, parents and joint types)");
   }
   return clip;

@@ -13,8 +13,8 @@
 #include "animator/session_file.hpp"
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
-#include "io/bvh.hpp"
 #include "core/kinematics.hpp"
+#include "io/bvh.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {
@@ -28,7 +28,9 @@ std::shared_ptr<const core::Model> human() {
   return m;
 }
 
-Vector3 position(const Session& s, const char* link) { return s.kinematics().X_W[s.model().link_index(link)].p; }
+Vector3 position(const Session& s, const char* link) {
+  return s.kinematics().X_W[s.model().link_index(link)].p;
+}
 
 void run(Session& s, int ticks, double dt = 1.0 / 60) {
   for (int k = 0; k < ticks; ++k) s.tick(dt);
@@ -44,9 +46,12 @@ core::Clip swinging_clip(const core::Model& m, int frames = 60) {
     q[1] += 0.02 * std::sin(2 * std::numbers::pi * t);  // root height
     for (const char* arm : {"l_uarm", "r_uarm"}) {
       const int j = m.link_index(arm);
-      core::set_quaternion_at(q, m.idx_q[j], Quaternion(Eigen::AngleAxisd(0.4 * std::sin(2 * std::numbers::pi * t), Vector3::UnitX())));
+      core::set_quaternion_at(q, m.idx_q[j],
+                              Quaternion(Eigen::AngleAxisd(0.4 * std::sin(2 * std::numbers::pi * t),
+                                                           Vector3::UnitX())));
     }
-    for (const char* knee : {"l_shank", "r_shank"}) q[m.idx_q[m.link_index(knee)]] = 0.3 + 0.2 * std::sin(std::numbers::pi * t);
+    for (const char* knee : {"l_shank", "r_shank"})
+      q[m.idx_q[m.link_index(knee)]] = 0.3 + 0.2 * std::sin(std::numbers::pi * t);
     c.frames.push_back(q);
   }
   return c;
@@ -129,7 +134,8 @@ TEST(Session, KeysInterpolateAndPlayBack) {
   s.key_insert(1.0, Interpolation::kLinear);
   ASSERT_EQ(s.keys().keys().size(), 2u);
   s.seek(0.5);
-  EXPECT_NEAR(s.q()[m.idx_q[elbow]], 0.5 * (e0 + 1.2), 1e-9);  // smooth from key 0: symmetric Hermite midpoint
+  EXPECT_NEAR(s.q()[m.idx_q[elbow]], 0.5 * (e0 + 1.2),
+              1e-9);  // smooth from key 0: symmetric Hermite midpoint
   s.play();
   run(s, 15);
   EXPECT_NEAR(s.playback().time, 0.75, 1e-9);
@@ -213,7 +219,9 @@ TEST(Session, EditingInMotionKeepsPinnedFeetAndLeavesOtherFramesUntouched) {
   for (int f = 0; f < base.size(); ++f) {
     const bool outside = f < layer.first_frame - 6 || f > layer.last_frame() + 6;
     if (outside) {
-      EXPECT_EQ(std::memcmp(edited.frames[f].data(), base.frames[f].data(), sizeof(double) * m.nq), 0) << f;
+      EXPECT_EQ(std::memcmp(edited.frames[f].data(), base.frames[f].data(), sizeof(double) * m.nq),
+                0)
+          << f;
     }
   }
   EXPECT_NE(edited.frames[40], base.frames[40]);
@@ -273,7 +281,8 @@ TEST(Session, EditingInMotionOnARealCmuClipKeepsTheFeetWithinAMillimetre) {
   for (int f = layer.first_frame; f <= layer.last_frame(); ++f) {
     core::forward_kinematics(m, got, edited.frames[f]);
     core::forward_kinematics(m, ref, base.frames[f]);
-    for (int foot : feet) kept_drift = std::max(kept_drift, (got.X_W[foot].p - ref.X_W[foot].p).norm());
+    for (int foot : feet)
+      kept_drift = std::max(kept_drift, (got.X_W[foot].p - ref.X_W[foot].p).norm());
   }
   EXPECT_LE(kept_drift, 1e-3);
   // reported, not asserted: the fade in and out blends the edge displacement without the pins
@@ -283,15 +292,20 @@ TEST(Session, EditingInMotionOnARealCmuClipKeepsTheFeetWithinAMillimetre) {
     if (f >= layer.first_frame && f <= layer.last_frame()) continue;
     core::forward_kinematics(m, got, edited.frames[f]);
     core::forward_kinematics(m, ref, base.frames[f]);
-    for (int foot : feet) fade_drift = std::max(fade_drift, (got.X_W[foot].p - ref.X_W[foot].p).norm());
+    for (int foot : feet)
+      fade_drift = std::max(fade_drift, (got.X_W[foot].p - ref.X_W[foot].p).norm());
   }
-  std::printf("CMU walk edit: foot drift %.3f mm live, %.3f mm kept, %.3f mm in the fades; hand %.1f mm "
-              "from its target\n", 1e3 * foot_drift, 1e3 * kept_drift, 1e3 * fade_drift, 1e3 * hand_error);
+  std::printf(
+      "CMU walk edit: foot drift %.3f mm live, %.3f mm kept, %.3f mm in the fades; hand %.1f mm "
+      "from its target\n",
+      1e3 * foot_drift, 1e3 * kept_drift, 1e3 * fade_drift, 1e3 * hand_error);
   // outside the edited frames and the falloff (0.1 s = 12 frames) the motion is bit-identical
   int identical = 0;
   for (int f = 0; f < base.size(); ++f) {
-    if (f >= layer.first_frame - falloff_frames && f <= layer.last_frame() + falloff_frames) continue;
-    ASSERT_EQ(std::memcmp(edited.frames[f].data(), base.frames[f].data(), sizeof(double) * m.nq), 0) << f;
+    if (f >= layer.first_frame - falloff_frames && f <= layer.last_frame() + falloff_frames)
+      continue;
+    ASSERT_EQ(std::memcmp(edited.frames[f].data(), base.frames[f].data(), sizeof(double) * m.nq), 0)
+        << f;
     ++identical;
   }
   EXPECT_GT(identical, base.size() - frames - 2 * falloff_frames - 3);
@@ -304,7 +318,8 @@ TEST(Session, UndoRedoOfAThousandRandomEditsRestoresSerializedStatesExactly) {
   std::uniform_real_distribution<double> u(-1, 1);
   auto state = [&] { return session_to_json(s, /*include_character=*/false).dump(); };
   std::vector<std::string> states{state()};
-  const std::vector<const char*> links = {"r_hand", "l_hand", "head", "pelvis", "l_foot", "r_foot", "chest"};
+  const std::vector<const char*> links = {"r_hand", "l_hand", "head", "pelvis",
+                                          "l_foot", "r_foot", "chest"};
   for (int e = 0; e < 1000; ++e) {
     const int link = m.link_index(links[rng() % links.size()]);
     const size_t before = s.history().size();
@@ -323,13 +338,19 @@ TEST(Session, UndoRedoOfAThousandRandomEditsRestoresSerializedStatesExactly) {
         s.pin(link, rng() % 2 ? ik::TaskMode::kPose : ik::TaskMode::kPosition);
         break;
       case 2:
-        if (!s.pins().empty()) s.unpin(s.pins()[rng() % s.pins().size()].link);
-        else s.key_insert(std::abs(u(rng)) * 3);
+        if (!s.pins().empty())
+          s.unpin(s.pins()[rng() % s.pins().size()].link);
+        else
+          s.key_insert(std::abs(u(rng)) * 3);
         break;
-      case 3: s.key_insert(std::abs(u(rng)) * 3); break;
+      case 3:
+        s.key_insert(std::abs(u(rng)) * 3);
+        break;
       case 4:
-        if (!s.keys().empty()) s.key_delete(static_cast<int>(rng() % s.keys().keys().size()));
-        else s.key_insert(0.5);
+        if (!s.keys().empty())
+          s.key_delete(static_cast<int>(rng() % s.keys().keys().size()));
+        else
+          s.key_insert(0.5);
         break;
       case 5: {
         ik::SolverSettings st = s.solver_settings();
@@ -340,8 +361,10 @@ TEST(Session, UndoRedoOfAThousandRandomEditsRestoresSerializedStatesExactly) {
     }
     // settle between edits so the next gesture starts from rest (no extra entries)
     run(s, 2);
-    if (s.history().size() > before) states.push_back(state());
-    else states.back() = state();
+    if (s.history().size() > before)
+      states.push_back(state());
+    else
+      states.back() = state();
   }
   // every committed entry restores its serialized state exactly
   const size_t entries = s.history().size();
@@ -375,7 +398,8 @@ TEST(Session, SavesAndLoadsIdentically) {
   }
   s.drag_end();
   s.pause();
-  const std::string path = (std::filesystem::temp_directory_path() / "pindrag_session_test.json").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "pindrag_session_test.json").string();
   save_session(s, path);
   const auto loaded = load_session(path);
   EXPECT_EQ(session_to_json(*loaded).dump(), session_to_json(s).dump());
@@ -388,7 +412,8 @@ TEST(Session, SavesAndLoadsIdentically) {
     session_from_json(j, "test");
     FAIL();
   } catch (const SessionError& e) {
-    EXPECT_NE(std::string(e.what()).find("/pins/0/link: unknown link 'nope'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/pins/0/link: unknown link 'nope'"), std::string::npos)
+        << e.what();
   }
 }
 

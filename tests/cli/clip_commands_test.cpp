@@ -12,10 +12,10 @@
 
 #include "cli/edit_script.hpp"
 #include "cli/json_fields.hpp"
-#include "io/bvh.hpp"
 #include "core/kinematics.hpp"
-#include "tests/io/gltf_reader.hpp"
+#include "io/bvh.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/io/gltf_reader.hpp"
 
 namespace {
 
@@ -36,7 +36,8 @@ std::string slurp(const std::string& path) {
 // runs `pindrag <args>` with stdout and stderr captured in files of `dir`
 Outcome pindrag(const gltf_test::TempDir& dir, const std::string& args) {
   const std::string out = dir.path("stdout.txt"), err = dir.path("stderr.txt");
-  const std::string cmd = std::string(PINDRAG_EXE) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+  const std::string cmd =
+      std::string(PINDRAG_EXE) + " " + args + " >" + out + " 2>" + err + " </dev/null";
   const int raw = std::system(cmd.c_str());
   Outcome r;
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -108,7 +109,8 @@ TEST(ConvertCommand, BvhToBvhWithOrderAndRate) {
   const double height = io::bvh_rest_extent(src).height * io::kCmuUnit;
   double worst = 0;
   for (const auto& [name, track] : b) {
-    for (int f = 0; f < got.frames; ++f) worst = std::max(worst, (track[f] - a.at(name)[2 * f]).norm());
+    for (int f = 0; f < got.frames; ++f)
+      worst = std::max(worst, (track[f] - a.at(name)[2 * f]).norm());
   }
   EXPECT_LT(worst, 1e-4 * height) << "worst joint position error " << worst << " m";
 }
@@ -123,11 +125,13 @@ TEST(ConvertCommand, BadInputsExitNonZeroNamingTheProblem) {
   const std::vector<Case> cases = {
       {"convert " + walk() + " " + dir.path("out.txt"), "OUT: "},
       {"convert " + walk() + " " + out + " --order XXY", "--order: 'XXY'"},
-      {"convert " + walk() + " " + dir.path("o.glb") + " --order ZXY", "--order: applies to a BVH output only"},
+      {"convert " + walk() + " " + dir.path("o.glb") + " --order ZXY",
+       "--order: applies to a BVH output only"},
       {"convert " + walk() + " " + out + " --scale -1", "--scale: must be a positive number"},
       {"convert " + walk() + " " + out + " --fps 0", "--fps must be a number in (0, 1000]"},
       {"convert " + dir.path("missing.bvh") + " " + out, "missing.bvh"},
-      {"convert " + fixtures::source_dir() + "/tests/fixtures/malformed/bvh/nan_value.bvh " + out, "nan_value.bvh: line"},
+      {"convert " + fixtures::source_dir() + "/tests/fixtures/malformed/bvh/nan_value.bvh " + out,
+       "nan_value.bvh: line"},
   };
   for (const Case& c : cases) {
     const Outcome r = pindrag(dir, c.args);
@@ -166,20 +170,25 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
 
 // both feet pinned while the right hand is pulled up and forward over half a second
 json walk_script() {
-  return {{"falloff", 0.1},
-          {"edits",
-           {{{"start", 0.8},
-             {"end", 1.3},
-             {"pins", {{{"link", "LeftFoot"}, {"mode", "pose"}}, {{"link", "RightFoot"}, {"mode", "pose"}}}},
-             {"drag",
-              {{"link", "RightHand"},
-               {"keys", {{{"time", 0.8}, {"position", {0, 0, 0}}}, {{"time", 1.0}, {"position", {0, 0.08, 0.09}}}}}}}}}}};
+  return {
+      {"falloff", 0.1},
+      {"edits",
+       {{{"start", 0.8},
+         {"end", 1.3},
+         {"pins",
+          {{{"link", "LeftFoot"}, {"mode", "pose"}}, {{"link", "RightFoot"}, {"mode", "pose"}}}},
+         {"drag",
+          {{"link", "RightHand"},
+           {"keys",
+            {{{"time", 0.8}, {"position", {0, 0, 0}}},
+             {{"time", 1.0}, {"position", {0, 0.08, 0.09}}}}}}}}}}};
 }
 
 TEST(EditCommand, EditsInMotionKeepingFeetAndOtherFrames) {
   PINDRAG_REQUIRE_DATA_DIR();
   gltf_test::TempDir dir;
-  const std::string script = dir.path("edits.json"), edited = dir.path("edited.bvh"), plain = dir.path("plain.bvh");
+  const std::string script = dir.path("edits.json"), edited = dir.path("edited.bvh"),
+                    plain = dir.path("plain.bvh");
   std::ofstream(script) << walk_script().dump(2);
   Outcome r = pindrag(dir, "edit " + walk() + " --script " + script + " -o " + edited);
   ASSERT_EQ(r.status, 0) << r.err;
@@ -196,9 +205,11 @@ TEST(EditCommand, EditsInMotionKeepingFeetAndOtherFrames) {
       EXPECT_TRUE(same) << "frame " << f;
     }
     if (f > first && f <= last) {
-      for (const char* n : {"LeftFoot", "RightFoot"}) foot = std::max(foot, (pa.at(n)[f] - pb.at(n)[f]).norm());
+      for (const char* n : {"LeftFoot", "RightFoot"})
+        foot = std::max(foot, (pa.at(n)[f] - pb.at(n)[f]).norm());
     }
-    if (f >= 120 && f <= last) hand = std::max(hand, (pa.at("RightHand")[f] - pb.at("RightHand")[f]).norm());
+    if (f >= 120 && f <= last)
+      hand = std::max(hand, (pa.at("RightHand")[f] - pb.at("RightHand")[f]).norm());
   }
   EXPECT_LE(foot, 1e-3) << "feet drift in metres";
   EXPECT_GT(hand, 0.1) << "the hand follows the drag 12 cm off the clip";

@@ -11,9 +11,9 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "io/bundled_characters.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
+#include "io/bundled_characters.hpp"
 
 namespace {
 

@@ -11,7 +11,9 @@ namespace {
 using namespace core;
 
 // q and q' describe the same configuration (quaternions up to sign)
-void expect_same_configuration(const Model& m, const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+void expect_same_configuration(const Model& m,
+                               const Eigen::VectorXd& a,
+                               const Eigen::VectorXd& b,
                                double tol) {
   Eigen::VectorXd d = difference(m, a, b);
   EXPECT_LT(d.cwiseAbs().maxCoeff(), tol);
@@ -36,7 +38,8 @@ TEST(Configuration, IntegrateOfDifferenceReachesTheTarget) {
     for (int i = 1; i < m->njoints; ++i) {
       const int iq = m->idx_q[i];
       const int n = joint_nq(m->joint_type[i]);
-      const bool has_quat = m->joint_type[i] == JointType::kSpherical || m->joint_type[i] == JointType::kFree;
+      const bool has_quat =
+          m->joint_type[i] == JointType::kSpherical || m->joint_type[i] == JointType::kFree;
       const int qi = m->joint_type[i] == JointType::kFree ? iq + 3 : iq;
       if (m->joint_type[i] == JointType::kFree) {
         EXPECT_TRUE(q.segment<3>(iq).isApprox(q1.segment<3>(iq), 1e-10));

@@ -8,7 +8,8 @@
 // friction loss, passive forces and actuation disabled, armature, damping and stiffness zeroed.
 // Models reach MuJoCo as
 //   - our own models (human48, human34, the branching test tree) written out as MJCF by
-//     fixtures::write_mjcf() (tests/fixtures/mjcf_writer.hpp): free root, ball joints, hinges, slides, inertials, our Y-up world;
+//     fixtures::write_mjcf() (tests/fixtures/mjcf_writer.hpp): free root, ball joints, hinges,
+//     slides, inertials, our Y-up world;
 //   - URDF files loaded by MuJoCo's URDF reader from a copy that keeps every link a body and gives
 //     massless links a small mass (MuJoCo refuses massless moving bodies); our model loads the same
 //     copy, so both see identical inertias;
@@ -26,15 +27,13 @@
 //     v = [ω; v] body twist in the child frame. qvel = T v with T per joint, qacc = T a + Ṫ v,
 //     τ_ours = Tᵀ τ_mj, H_ours = Tᵀ H_mj T (T is orthogonal).
 //   - MuJoCo's ball joint: quaternion and angular velocity in the body frame, as ours.
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
-
-#include "tests/fixtures/mjcf_writer.hpp"
 #include <tinyxml2.h>
 #include <unistd.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -55,12 +54,13 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "io/bundled_characters.hpp"
-#include "io/urdf.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/urdf.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/fixtures/mjcf_writer.hpp"
 
 namespace {
 
@@ -787,9 +787,7 @@ TEST(DynamicsOracle, BenchUrdfsAgreeWithTheirMujocoTwins) {
       ADD_FAILURE() << "missing from " << dir;
       continue;
     }
-    const auto m =
-        io::load_urdf_file(dir + "/" + urdf, free ? free_root : io::LoadOptions{})
-            .model;
+    const auto m = io::load_urdf_file(dir + "/" + urdf, free ? free_root : io::LoadOptions{}).model;
     EXPECT_EQ(compare_with_mujoco(urdf + " vs " + xml, dir + "/" + xml, *m, z_up_world()), "");
   }
 }

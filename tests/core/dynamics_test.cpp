@@ -99,7 +99,8 @@ TEST(Aba, InvertsRnea) {
     for (std::uint64_t seed = 0; seed < 10; ++seed) {
       const RandomState s = random_state(*m, seed);
       std::vector<Force> f_ext(m->njoints);
-      for (int i = 1; i < m->njoints; ++i) f_ext[i] = Force{Vector3(0.1 * i, -0.2, 0.3), Vector3(1, i * 0.5, -2)};
+      for (int i = 1; i < m->njoints; ++i)
+        f_ext[i] = Force{Vector3(0.1 * i, -0.2, 0.3), Vector3(1, i * 0.5, -2)};
       const Eigen::VectorXd a = aba(*m, d, s.q, s.v, s.tau, f_ext);
       const Eigen::VectorXd tau = rnea(*m, d, s.q, s.v, a, f_ext);
       EXPECT_LT((tau - s.tau).norm(), 1e-10 * (1 + s.tau.norm())) << m->name << " seed " << seed;

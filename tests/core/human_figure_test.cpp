@@ -19,12 +19,12 @@
 #include <vector>
 
 #include "core/configuration.hpp"
-#include "io/bundled_characters.hpp"
-#include "io/character_json.hpp"
-#include "io/urdf.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
 #include "core/swing_twist.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/character_json.hpp"
+#include "io/urdf.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/fixtures/kinematics_checks.hpp"
 

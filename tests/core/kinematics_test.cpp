@@ -66,7 +66,8 @@ TEST(Kinematics, VelocitiesAndAccelerationsAgreeWithJacobians) {
     const PointMotion acc = point_acceleration(*m, d, link, p);
     const PointMotion jdv = point_jdot_v(*m, d, link, p);
     EXPECT_TRUE(acc.linear.isApprox(J.linear * a + jdv.linear, 1e-12));
-    EXPECT_TRUE(acc.angular.isApprox(J.angular * a + jdv.angular, 1e-12) || acc.angular.norm() < 1e-14);
+    EXPECT_TRUE(acc.angular.isApprox(J.angular * a + jdv.angular, 1e-12) ||
+                acc.angular.norm() < 1e-14);
   }
 }
 

@@ -76,8 +76,9 @@ TEST(ModelBuilder, RejectsMissingParentAndCycles) {
   b.add_link(box_link("x", "y", 1, Vector3(0.1, 0.1, 0.1)));
   b.add_link(box_link("y", "x", 1, Vector3(0.1, 0.1, 0.1)));
   b.add_link(box_link("self", "self", 1, Vector3(0.1, 0.1, 0.1)));
-  expect_error(b, {"link 'orphan': parent link 'nowhere' does not exist", "link 'x': lies on a cycle",
-                   "link 'y': lies on a cycle", "link 'self': is its own parent"});
+  expect_error(b,
+               {"link 'orphan': parent link 'nowhere' does not exist", "link 'x': lies on a cycle",
+                "link 'y': lies on a cycle", "link 'self': is its own parent"});
 }
 
 TEST(ModelBuilder, RequiresExactlyOneRoot) {
@@ -96,8 +97,8 @@ TEST(ModelBuilder, RejectsNonFiniteNumbers) {
   b.link(1).joint.X_PJ.p.x() = NAN;
   b.link(0).com.y() = INFINITY;
   b.link(1).joint.limits.lower = NAN;
-  expect_error(b, {"joint 'arm': placement is not a finite", "link 'root': centre of mass is not finite",
-                   "joint 'arm': limit is NaN"});
+  expect_error(b, {"joint 'arm': placement is not a finite",
+                   "link 'root': centre of mass is not finite", "joint 'arm': limit is NaN"});
 }
 
 TEST(ModelBuilder, RejectsUnphysicalInertia) {
@@ -125,7 +126,8 @@ TEST(ModelBuilder, RejectsInvertedLimitsAndBadRanges) {
   s.joint.range.twist_upper = {0, 0, 0};
   b.add_link(s);
   expect_error(b, {"joint 'arm': lower limit 1 > upper limit -1", "outside the unit disk",
-                   "range vertex 2: twist lower 1 > upper 0", "range triangle 1 refers to a missing vertex"});
+                   "range vertex 2: twist lower 1 > upper 0",
+                   "range triangle 1 refers to a missing vertex"});
 }
 
 TEST(ModelBuilder, RejectsBadGeometry) {
@@ -143,7 +145,8 @@ TEST(ModelBuilder, RejectsBadGeometry) {
 
 TEST(ModelBuilder, CapsTheNumberOfLinks) {
   ModelBuilder b;
-  for (int i = 0; i < kMaxLinks; ++i) b.add_link(box_link("l" + std::to_string(i), "", 1, Vector3::Ones()));
+  for (int i = 0; i < kMaxLinks; ++i)
+    b.add_link(box_link("l" + std::to_string(i), "", 1, Vector3::Ones()));
   EXPECT_THROW(b.add_link(box_link("one_too_many", "", 1, Vector3::Ones())), ModelError);
 }
 
@@ -151,7 +154,8 @@ TEST(ModelBuilder, LongChainsBuildWithoutRecursion) {
   // 10,000 links deep: depth-first ordering must not recurse
   ModelBuilder b;
   for (int i = 0; i < kMaxLinks; ++i) {
-    LinkSpec l = box_link("l" + std::to_string(i), i ? "l" + std::to_string(i - 1) : "", 1, Vector3::Ones());
+    LinkSpec l =
+        box_link("l" + std::to_string(i), i ? "l" + std::to_string(i - 1) : "", 1, Vector3::Ones());
     l.joint.type = JointType::kRevolute;
     b.add_link(l);
   }

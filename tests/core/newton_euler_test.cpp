@@ -21,11 +21,11 @@
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/human_figure.hpp"
-#include "io/bundled_characters.hpp"
-#include "io/urdf.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
+#include "io/bundled_characters.hpp"
+#include "io/urdf.hpp"
 
 namespace {
 

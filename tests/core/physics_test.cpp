@@ -29,11 +29,12 @@ double energy_drift(const Model& m, Eigen::VectorXd q, Eigen::VectorXd v, double
   double worst = 0;
   const int steps = static_cast<int>(std::lround(T / dt));
   for (int k = 0; k < steps; ++k) {
-    rk4_step(m, q, v, dt,
-             [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, Eigen::VectorXd& a) {
-               a = aba(m, d, qq, vv, tau);
-             },
-             w);
+    rk4_step(
+        m, q, v, dt,
+        [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, Eigen::VectorXd& a) {
+          a = aba(m, d, qq, vv, tau);
+        },
+        w);
     worst = std::max(worst, std::abs(energy(q, v) - E0) / std::abs(E0));
   }
   return worst;
@@ -72,11 +73,12 @@ TEST(Physics, MomentumOfAFreeFloatingFigureIsConserved) {
   EXPECT_LT((h_matrix - h0.vector()).norm(), 1e-12 * (1 + h0.vector().norm()));
   Rk4Workspace w;
   for (int k = 0; k < 5000; ++k) {
-    rk4_step(*m, q, v, 2e-4,
-             [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, Eigen::VectorXd& a) {
-               a = aba(*m, d, qq, vv, tau);
-             },
-             w);
+    rk4_step(
+        *m, q, v, 2e-4,
+        [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv, Eigen::VectorXd& a) {
+          a = aba(*m, d, qq, vv, tau);
+        },
+        w);
   }
   forward_kinematics(*m, d, q, v);
   const Force h1 = centroidal_momentum(*m, d);

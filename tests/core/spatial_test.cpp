@@ -45,7 +45,8 @@ TEST(Spatial, CrossProductsMatchFeatherstoneMatrices) {
   const Force f{Vector3(2, -1, 0.3), Vector3(0.2, 0.7, -0.4)};
   EXPECT_TRUE(v.cross(m).vector().isApprox(motion_cross_matrix(v) * m.vector(), 1e-14));
   // crf(v) = -crm(v)ᵀ  (RBDA eq. 2.32)
-  EXPECT_TRUE(cross(v, f).vector().isApprox(-motion_cross_matrix(v).transpose() * f.vector(), 1e-14));
+  EXPECT_TRUE(
+      cross(v, f).vector().isApprox(-motion_cross_matrix(v).transpose() * f.vector(), 1e-14));
 }
 
 TEST(Spatial, InertiaTransformMatchesCongruence) {
@@ -66,7 +67,8 @@ TEST(Spatial, ExponentialAndLogarithmInvertEachOther) {
     const Vector3 w = angle * Vector3(1, -2, 0.5).normalized();
     // at exactly π the rotation vectors w and −w describe the same rotation
     const Vector3 l = log3(exp3(w));
-    const double err = angle == std::numbers::pi ? std::min((l - w).norm(), (l + w).norm()) : (l - w).norm();
+    const double err =
+        angle == std::numbers::pi ? std::min((l - w).norm(), (l + w).norm()) : (l - w).norm();
     EXPECT_LT(err, 1e-9 * std::max(1.0, angle)) << angle;
     const Quaternion q = quaternion_exp(w);
     EXPECT_NEAR(q.norm(), 1.0, 1e-15);

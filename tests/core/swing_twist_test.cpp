@@ -67,8 +67,9 @@ TEST(SwingTwist, SingularDirectionIsFlaggedNotNaN) {
   const Quaternion near(Eigen::AngleAxisd(kPi - 1e-6, Vector3(0, 0.6, 0.8)));
   const SwingTwist sn = swing_twist(near);
   EXPECT_FALSE(sn.singular);
-  EXPECT_TRUE(from_swing_twist(sn.a_y, sn.a_z, sn.twist).toRotationMatrix().isApprox(
-      near.toRotationMatrix(), 1e-9));
+  EXPECT_TRUE(from_swing_twist(sn.a_y, sn.a_z, sn.twist)
+                  .toRotationMatrix()
+                  .isApprox(near.toRotationMatrix(), 1e-9));
 }
 
 TEST(SwingTwist, TriangleInsideOutsideAndTwistInterpolation) {
@@ -138,10 +139,12 @@ TEST(SwingTwist, JointRangeFrameMapsTheNominalDirection) {
   b.add_link(l);
   const auto m = b.finalize();
   // twisting about the limb (−y in the joint frame) is a twist, not a swing
-  const SwingTwist t = joint_swing_twist(*m, 2, Quaternion(Eigen::AngleAxisd(0.05, -Vector3::UnitY())));
+  const SwingTwist t =
+      joint_swing_twist(*m, 2, Quaternion(Eigen::AngleAxisd(0.05, -Vector3::UnitY())));
   EXPECT_NEAR(t.twist, 0.05, 1e-14);
   EXPECT_NEAR(std::hypot(t.a_y, t.a_z), 0.0, 1e-14);
-  const SwingTwist s = joint_swing_twist(*m, 2, Quaternion(Eigen::AngleAxisd(0.4, Vector3::UnitX())));
+  const SwingTwist s =
+      joint_swing_twist(*m, 2, Quaternion(Eigen::AngleAxisd(0.4, Vector3::UnitX())));
   EXPECT_NEAR(std::hypot(s.a_y, s.a_z), std::sin(0.2), 1e-14);
 }
 

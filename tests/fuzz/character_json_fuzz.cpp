@@ -17,8 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   const std::string written = io::write_character_json(*first.model);
-  const io::LoadResult second =
-      io::load_character_json_string(written, "fuzz-rewritten.json", "");
+  const io::LoadResult second = io::load_character_json_string(written, "fuzz-rewritten.json", "");
   if (!(*second.model == *first.model)) std::abort();
   if (io::write_character_json(*second.model) != written) std::abort();
   return 0;

@@ -10,11 +10,11 @@
 
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
-#include "io/bundled_characters.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
 #include "core/swing_twist.hpp"
 #include "ik/solver.hpp"
+#include "io/bundled_characters.hpp"
 
 namespace {
 
@@ -26,7 +26,10 @@ constexpr double kPi = std::numbers::pi;
 // A figure being posed: model, workspace, configuration, problem and solver.
 struct Rig {
   explicit Rig(std::shared_ptr<const core::Model> m, SolverSettings s = {})
-      : model(std::move(m)), data(*model), q(core::neutral_configuration(*model)), solver(*model, s) {
+      : model(std::move(m)),
+        data(*model),
+        q(core::neutral_configuration(*model)),
+        solver(*model, s) {
     core::forward_kinematics(*model, data, q);
   }
   int link(const char* name) const {
@@ -42,7 +45,9 @@ struct Rig {
     core::forward_kinematics(*model, data, q);
     return Quaternion(data.X_W[link(name)].R);
   }
-  int pin(const char* name, TaskMode mode = TaskMode::kPose, const Vector3& point = Vector3::Zero()) {
+  int pin(const char* name,
+          TaskMode mode = TaskMode::kPose,
+          const Vector3& point = Vector3::Zero()) {
     return problem.add(LinkTask{.role = kPin,
                                 .link = link(name),
                                 .p_LinkPoint = point,
@@ -174,7 +179,9 @@ TEST(HardCases, DragBeyondReachKeepsTheDragExactAndPinsRecoverOnRelease) {
     // per-step clamp (above it they approach at the clamped speed K e_max). In a stretched leg
     // the damped SR inverse slows the rate below K from σ²/(σ² + k); docs/ik.md shows the trade.
     rig.problem.remove(drag);
-    auto position_error = [&] { return std::max(rig.task_position_error(lf), rig.task_position_error(rf)); };
+    auto position_error = [&] {
+      return std::max(rig.task_position_error(lf), rig.task_position_error(rf));
+    };
     rig.step();
     double previous = position_error();
     for (int f = 0; f < 150; ++f) {
@@ -194,12 +201,18 @@ TEST(HardCases, ManyPinsOverConstrainTheLowerLevelGracefully) {
   auto scenario = [] {
     Rig rig(human48());
     const Vector3 heel(0, -0.05, -0.05), toe(0, -0.05, 0.12);
-    std::vector<int> pins = {rig.pin("l_foot", TaskMode::kPose, heel), rig.pin("l_foot", TaskMode::kPose, toe),
-                             rig.pin("l_toes"),  rig.pin("r_foot"),  rig.pin("r_shank"),
-                             rig.pin("l_hand"),  rig.pin("head"),    rig.pin("chest"),
+    std::vector<int> pins = {rig.pin("l_foot", TaskMode::kPose, heel),
+                             rig.pin("l_foot", TaskMode::kPose, toe),
+                             rig.pin("l_toes"),
+                             rig.pin("r_foot"),
+                             rig.pin("r_shank"),
+                             rig.pin("l_hand"),
+                             rig.pin("head"),
+                             rig.pin("chest"),
                              rig.pin("l_thigh")};
     for (int j = 2; j < rig.model->njoints; ++j) {
-      if (core::joint_nv(rig.model->joint_type[j]) == 3) rig.problem.add(JointReferenceTask{.joint = j});
+      if (core::joint_nv(rig.model->joint_type[j]) == 3)
+        rig.problem.add(JointReferenceTask{.joint = j});
     }
     const int drag =
         rig.problem.add(LinkTask{.role = kDrag,
@@ -233,7 +246,8 @@ TEST(HardCases, JointsDrivenOutOfRangeRecoverWithoutChatter) {
     // a pose out of range: shoulder twisted and knee hyperextended, feet pinned
     Rig rig(human48());
     const int sh = rig.link("r_uarm"), knee = rig.link("l_shank");
-    core::set_quaternion_at(rig.q, rig.model->idx_q[sh], Quaternion(Eigen::AngleAxisd(2.5, Vector3::UnitY())));
+    core::set_quaternion_at(rig.q, rig.model->idx_q[sh],
+                            Quaternion(Eigen::AngleAxisd(2.5, Vector3::UnitY())));
     rig.q[rig.model->idx_q[knee]] = rig.model->limits[knee].lower - 0.4;
     rig.pin("l_foot");
     rig.pin("r_foot");
@@ -271,7 +285,8 @@ TEST(HardCases, SphericalSingularDirectionIsHandled) {
     const int hip = rig.link("r_thigh");
     // reverse the nominal (range-frame x) direction of the hip: swing of exactly π
     const Quaternion& F = rig.model->spherical_range[hip].frame;
-    const Quaternion flip = F * Quaternion(Eigen::AngleAxisd(kPi, Vector3::UnitY())) * F.conjugate();
+    const Quaternion flip =
+        F * Quaternion(Eigen::AngleAxisd(kPi, Vector3::UnitY())) * F.conjugate();
     core::set_quaternion_at(rig.q, rig.model->idx_q[hip], flip);
     const core::SwingTwist st = core::joint_swing_twist(*rig.model, hip, flip);
     EXPECT_TRUE(st.singular);
@@ -279,7 +294,9 @@ TEST(HardCases, SphericalSingularDirectionIsHandled) {
     rig.run(240);
     // the range row pulls it back toward its standard orientation, into the range
     const Quaternion r = core::quaternion_at(rig.q, rig.model->idx_q[hip]);
-    EXPECT_TRUE(core::check_range(rig.model->spherical_range[hip], core::joint_swing_twist(*rig.model, hip, r)).inside);
+    EXPECT_TRUE(core::check_range(rig.model->spherical_range[hip],
+                                  core::joint_swing_twist(*rig.model, hip, r))
+                    .inside);
     return rig.q;
   };
   expect_deterministic(scenario);
@@ -301,8 +318,12 @@ TEST(HardCases, TwistWrapTakesTheShortWay) {
     b.add_link(arm);
     Rig rig(b.finalize());
     const int j = rig.link("arm");
-    core::set_quaternion_at(rig.q, rig.model->idx_q[j], Quaternion(Eigen::AngleAxisd(kPi - 0.02, Vector3::UnitX())));
-    rig.problem.add(JointReferenceTask{.joint = j, .R_ref = Quaternion(Eigen::AngleAxisd(-kPi + 0.02, Vector3::UnitX())), .gain = 10});
+    core::set_quaternion_at(rig.q, rig.model->idx_q[j],
+                            Quaternion(Eigen::AngleAxisd(kPi - 0.02, Vector3::UnitX())));
+    rig.problem.add(
+        JointReferenceTask{.joint = j,
+                           .R_ref = Quaternion(Eigen::AngleAxisd(-kPi + 0.02, Vector3::UnitX())),
+                           .gain = 10});
     double max_speed = 0;
     for (int f = 0; f < 120; ++f) max_speed = std::max(max_speed, rig.step().max_joint_speed);
     // a 0.04 rad step at gain 10 needs at most 0.4 rad/s; the long way round would need ~62
@@ -321,7 +342,8 @@ TEST(HardCases, OrientationErrorOf180DegreesStillPulls) {
     Rig rig(human48());
     rig.pin("pelvis");
     rig.pin("chest");
-    const Quaternion flipped = Quaternion(Eigen::AngleAxisd(kPi, Vector3::UnitY())) * rig.R("r_hand");
+    const Quaternion flipped =
+        Quaternion(Eigen::AngleAxisd(kPi, Vector3::UnitY())) * rig.R("r_hand");
     const int pin = rig.problem.add(LinkTask{.role = kPin,
                                              .link = rig.link("r_hand"),
                                              .target_R_W = flipped,
@@ -343,8 +365,9 @@ TEST(HardCases, NoEulerAngleGimbalLock) {
     Eigen::VectorXd q = core::random_configuration(*m, seed);
     // put the shoulder at the pitch that locks YXZ Euler angles (middle angle 90°)
     const int sh = m->link_index("l_uarm");
-    core::set_quaternion_at(q, m->idx_q[sh], Quaternion(Eigen::AngleAxisd(kPi / 2, Vector3::UnitX())) *
-                                                 core::quaternion_at(q, m->idx_q[sh]));
+    core::set_quaternion_at(q, m->idx_q[sh],
+                            Quaternion(Eigen::AngleAxisd(kPi / 2, Vector3::UnitX())) *
+                                core::quaternion_at(q, m->idx_q[sh]));
     core::compute_joint_jacobians(*m, d, q);
     for (int j = 1; j < m->njoints; ++j) {
       if (m->joint_type[j] != core::JointType::kSpherical) continue;
@@ -355,11 +378,13 @@ TEST(HardCases, NoEulerAngleGimbalLock) {
   // and the IK turns the hand about every axis from that pose
   Rig rig(human48());
   const int sh = rig.link("l_uarm");
-  core::set_quaternion_at(rig.q, rig.model->idx_q[sh], Quaternion(Eigen::AngleAxisd(kPi / 2, Vector3::UnitX())));
+  core::set_quaternion_at(rig.q, rig.model->idx_q[sh],
+                          Quaternion(Eigen::AngleAxisd(kPi / 2, Vector3::UnitX())));
   rig.pin("pelvis");
   rig.pin("chest");
   for (int axis = 0; axis < 3; ++axis) {
-    const Quaternion target = Quaternion(Eigen::AngleAxisd(0.3, Vector3::Unit(axis))) * rig.R("l_uarm");
+    const Quaternion target =
+        Quaternion(Eigen::AngleAxisd(0.3, Vector3::Unit(axis))) * rig.R("l_uarm");
     rig.problem.clear();
     rig.pin("pelvis");
     rig.pin("chest");

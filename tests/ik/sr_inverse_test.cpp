@@ -38,8 +38,8 @@ TEST(SrInverse, BothFormsMinimizeTheDampedObjective) {
     SrInverse sr;
     Eigen::VectorXd x(n);
     sr.solve(A, b, k, DampingSchedule::kConstant, 1.0, x);
-    const Eigen::VectorXd residual = (A.transpose() * A + k * Eigen::MatrixXd::Identity(n, n)) * x -
-                                     A.transpose() * b;
+    const Eigen::VectorXd residual =
+        (A.transpose() * A + k * Eigen::MatrixXd::Identity(n, n)) * x - A.transpose() * b;
     EXPECT_LT(residual.norm(), 1e-12);
   }
 }

@@ -4,7 +4,10 @@
 // export of every import; a round trip of our own export; malformed inputs.
 #include "io/assimp_import.hpp"
 
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -12,14 +15,11 @@
 
 #include <Eigen/SVD>
 #include <assimp/Importer.hpp>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <gtest/gtest.h>
 #include <map>
 #include <random>
 #include <set>
@@ -28,12 +28,12 @@
 #include "core/configuration.hpp"
 #include "core/data.hpp"
 #include "core/human_figure.hpp"
-#include "io/gltf.hpp"
-#include "io/sandbox.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_builder.hpp"
-#include "tests/io/gltf_reader.hpp"
+#include "io/gltf.hpp"
+#include "io/sandbox.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/io/gltf_reader.hpp"
 
 namespace {
 
@@ -65,8 +65,8 @@ void expect_no_children() {
 // the sandbox
 
 TEST(Sandbox, ReturnsWhatTheChildWrites) {
-  const auto r = io::run_sandboxed(
-      [](int fd) { return io::write_all(fd, "hello", 5) ? 0 : 1; }, {});
+  const auto r =
+      io::run_sandboxed([](int fd) { return io::write_all(fd, "hello", 5) ? 0 : 1; }, {});
   EXPECT_EQ(r.status, io::SandboxStatus::kOk) << r.message;
   EXPECT_EQ(r.reply, "hello");
   expect_no_children();
@@ -211,7 +211,8 @@ const io::SkinnedImport& imported(const std::string& file) {
 }
 
 Transform rigid_of(const Eigen::Matrix4d& M) {
-  Eigen::JacobiSVD<Matrix3> svd(Matrix3(M.topLeftCorner<3, 3>()), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Matrix3> svd(Matrix3(M.topLeftCorner<3, 3>()),
+                                Eigen::ComputeFullU | Eigen::ComputeFullV);
   Matrix3 U = svd.matrixU();
   if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(2) *= -1;
   return {U * svd.matrixV().transpose(), M.topRightCorner<3, 1>()};
@@ -231,7 +232,9 @@ class AssimpOracle {
     for (const aiNode* n = find(name); n != nullptr; n = n->mParent) G = local(n, a, t) * G;
     return G;
   }
-  const aiNode* find(const std::string& name) const { return scene_->mRootNode->FindNode(name.c_str()); }
+  const aiNode* find(const std::string& name) const {
+    return scene_->mRootNode->FindNode(name.c_str());
+  }
   // node's rest global matrix
   Eigen::Matrix4d rest_global(const std::string& name) const {
     Eigen::Matrix4d G = Eigen::Matrix4d::Identity();
@@ -270,12 +273,14 @@ class AssimpOracle {
       } else {
         unsigned i = 0;
         while (k[i + 1].mTime <= t) ++i;
-        R = slerp(v(k[i].mValue), v(k[i + 1].mValue), (t - k[i].mTime) / (k[i + 1].mTime - k[i].mTime));
+        R = slerp(v(k[i].mValue), v(k[i + 1].mValue),
+                  (t - k[i].mTime) / (k[i + 1].mTime - k[i].mTime));
       }
     }
     R.normalize();
     Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
-    M.topLeftCorner<3, 3>() = Quaternion(R[0], R[1], R[2], R[3]).toRotationMatrix() * S.asDiagonal();
+    M.topLeftCorner<3, 3>() =
+        Quaternion(R[0], R[1], R[2], R[3]).toRotationMatrix() * S.asDiagonal();
     M.topRightCorner<3, 1>() = T;
     return M;
   }
@@ -309,22 +314,25 @@ TEST(AssimpImport, EverySharedCharacterImports) {
   for (const Expected& e : kFiles) {
     const auto t0 = std::chrono::steady_clock::now();
     const io::SkinnedImport& s = imported(e.file);
-    const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double ms =
+        1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const core::Model& m = *s.model;
     EXPECT_EQ(m.nlinks(), e.links) << e.file;
     EXPECT_EQ(static_cast<int>(s.mesh.positions.size()), e.vertices) << e.file;
     EXPECT_EQ(static_cast<int>(s.clips.size()), e.clips) << e.file;
     EXPECT_EQ(s.unit_scale, e.unit_scale) << e.file;
     EXPECT_EQ(m.joint_type[1], core::JointType::kFree) << e.file;
-    for (int i = 2; i < m.njoints; ++i) EXPECT_EQ(m.joint_type[i], core::JointType::kSpherical) << m.link_name[i];
+    for (int i = 2; i < m.njoints; ++i)
+      EXPECT_EQ(m.joint_type[i], core::JointType::kSpherical) << m.link_name[i];
     EXPECT_GT(m.total_mass(), 69.999);
     EXPECT_LT(m.total_mass(), 70.001);
     EXPECT_FALSE(s.mesh.triangles.empty());
-    std::printf("  %-16s %5.1f ms: %d links, %zu vertices, %zu triangles, %zu bones, clip %d frames "
-                "from t = %.4f s, %zu warnings\n",
-                e.file.c_str(), ms, m.nlinks(), s.mesh.positions.size(), s.mesh.triangles.size(),
-                s.mesh.bones.size(), s.clips.empty() ? 0 : s.clips[0].clip.size(),
-                s.clips.empty() ? 0.0 : s.clips[0].start_time, s.warnings.size());
+    std::printf(
+        "  %-16s %5.1f ms: %d links, %zu vertices, %zu triangles, %zu bones, clip %d frames "
+        "from t = %.4f s, %zu warnings\n",
+        e.file.c_str(), ms, m.nlinks(), s.mesh.positions.size(), s.mesh.triangles.size(),
+        s.mesh.bones.size(), s.clips.empty() ? 0 : s.clips[0].clip.size(),
+        s.clips.empty() ? 0.0 : s.clips[0].start_time, s.warnings.size());
     for (const auto& w : s.warnings) std::printf("    warning: %s\n", w.c_str());
   }
   expect_no_children();
@@ -359,12 +367,13 @@ TEST(AssimpImport, NeutralConfigurationIsTheBindPose) {
       const Transform bind = rigid_of(A * B * AssimpOracle::m4(bone->mOffsetMatrix).inverse());
       const int i = m.link_index(bone->mName.C_Str());
       ASSERT_GT(i, 0) << bone->mName.C_Str();
-      worst = std::max({worst, (bind.R - data.X_W[i].R).cwiseAbs().maxCoeff(),
-                        (bind.p - data.X_W[i].p).norm()});
+      worst = std::max(
+          {worst, (bind.R - data.X_W[i].R).cwiseAbs().maxCoeff(), (bind.p - data.X_W[i].p).norm()});
     }
     // the file's offsets are float: its bind poses agree with each other to float precision
     EXPECT_LE(worst, 1e-5 * std::max(1.0, e.unit_scale * 100)) << e.file;
-    std::printf("  %-16s neutral FK vs the file's bind pose: max error %.3g\n", e.file.c_str(), worst);
+    std::printf("  %-16s neutral FK vs the file's bind pose: max error %.3g\n", e.file.c_str(),
+                worst);
   }
 }
 
@@ -394,7 +403,8 @@ TEST(AssimpImport, ClipReproducesTheSourceJointWorldPoses) {
     for (int k = 0; k < c.clip.size(); ++k) {
       const double t = std::min(end, (c.start_time + k * c.clip.frame_time) * tps);
       core::forward_kinematics(m, data, c.clip.frames[k]);
-      for (int i = 1; i < m.njoints; ++i) src[i] = rigid_of(A * oracle.global(m.link_name[i], 0, t));
+      for (int i = 1; i < m.njoints; ++i)
+        src[i] = rigid_of(A * oracle.global(m.link_name[i], 0, t));
       std::vector<double> bound(m.njoints, 0.0);
       for (int i = 1; i < m.njoints; ++i) {
         const int p = m.parent[i];
@@ -409,7 +419,8 @@ TEST(AssimpImport, ClipReproducesTheSourceJointWorldPoses) {
         worst_p = std::max(worst_p, ep);
         worst_excess = std::max(worst_excess, ep - bound[i]);
         ASSERT_LE(er, kRotationTolerance) << e.file << " frame " << k << " " << m.link_name[i];
-        ASSERT_LE(ep, bound[i] + kPositionTolerance) << e.file << " frame " << k << " " << m.link_name[i];
+        ASSERT_LE(ep, bound[i] + kPositionTolerance)
+            << e.file << " frame " << k << " " << m.link_name[i];
       }
     }
     double largest_drift = 0;
@@ -417,9 +428,10 @@ TEST(AssimpImport, ClipReproducesTheSourceJointWorldPoses) {
       EXPECT_NEAR(s.dropped_offset[i], drift[i], 1e-9) << m.link_name[i];
       largest_drift = std::max(largest_drift, drift[i]);
     }
-    std::printf("  %-16s %d frames vs assimp's nodes: rotation error %.3g, position error %.3g m "
-                "(largest kept bind offset deviation %.3g m; error beyond it %.3g m)\n",
-                e.file.c_str(), c.clip.size(), worst_r, worst_p, largest_drift, worst_excess);
+    std::printf(
+        "  %-16s %d frames vs assimp's nodes: rotation error %.3g, position error %.3g m "
+        "(largest kept bind offset deviation %.3g m; error beyond it %.3g m)\n",
+        e.file.c_str(), c.clip.size(), worst_r, worst_p, largest_drift, worst_excess);
   }
 }
 
@@ -447,15 +459,18 @@ TEST(AssimpImport, ThreeJsOnTheSourceGlbAgreesWithTheImportedClip) {
         const Json& f = r["frames"][k][n];
         ASSERT_TRUE(f.is_array()) << m.link_name[i];
         const Vector3 p(f[0].get<double>(), f[1].get<double>(), f[2].get<double>());
-        const Quaternion q(f[6].get<double>(), f[3].get<double>(), f[4].get<double>(), f[5].get<double>());
+        const Quaternion q(f[6].get<double>(), f[3].get<double>(), f[4].get<double>(),
+                           f[5].get<double>());
         worst_r = std::max(worst_r, (q.toRotationMatrix() - data.X_W[i].R).cwiseAbs().maxCoeff());
         double bound = 0;
         for (int j = i; j > 1; j = m.parent[j]) bound += s.dropped_offset[j];
         worst_p = std::max(worst_p, (p - data.X_W[i].p).norm() - bound);
       }
     }
-    std::printf("  three.js on %-16s %d frames: rotation error %.3g, position error beyond the "
-                "kept bind offsets %.3g m\n", e.file.c_str(), c.clip.size(), worst_r, worst_p);
+    std::printf(
+        "  three.js on %-16s %d frames: rotation error %.3g, position error beyond the "
+        "kept bind offsets %.3g m\n",
+        e.file.c_str(), c.clip.size(), worst_r, worst_p);
     EXPECT_LE(worst_r, kThreeTolerance) << e.file;
     EXPECT_LE(worst_p, kThreeTolerance) << e.file;
   }
@@ -506,8 +521,9 @@ TEST(AssimpImport, ExportOfEachImportIsValidAndReproducesItsClip) {
                   e.file.c_str(), ext, worst);
       if (!why.empty()) continue;
       const Json v = gltf_test::validate(path);
-      std::printf("    validator: errors %d warnings %d infos %d hints %d\n", v["errors"].get<int>(),
-                  v["warnings"].get<int>(), v["infos"].get<int>(), v["hints"].get<int>());
+      std::printf("    validator: errors %d warnings %d infos %d hints %d\n",
+                  v["errors"].get<int>(), v["warnings"].get<int>(), v["infos"].get<int>(),
+                  v["hints"].get<int>());
       EXPECT_EQ(v["errors"], 0) << v.dump();
       for (const Json& msg : v["messages"]) {
         EXPECT_EQ(kAllowedIssues.count(msg["code"]), 1u) << path << ": " << msg.dump();
@@ -540,15 +556,20 @@ TEST(AssimpImport, OurOwnExportRoundTrips) {
     for (int i = 1; i < m->njoints; ++i) {
       const int iq = m->idx_q[i];
       switch (m->joint_type[i]) {
-        case core::JointType::kRevolute: q[iq] = 0.8 * std::sin(t + i); break;
+        case core::JointType::kRevolute:
+          q[iq] = 0.8 * std::sin(t + i);
+          break;
         case core::JointType::kSpherical:
-          core::set_quaternion_at(q, iq, core::quaternion_exp(Vector3(0.5 * std::sin(t + i), 0.4 * std::cos(2 * t), 0.3)));
+          core::set_quaternion_at(
+              q, iq,
+              core::quaternion_exp(Vector3(0.5 * std::sin(t + i), 0.4 * std::cos(2 * t), 0.3)));
           break;
         case core::JointType::kFree:
           q.segment<3>(iq) = Vector3(0.3 * t, 0.02 * std::sin(5 * t), 0.1);
           core::set_quaternion_at(q, iq + 3, Quaternion(Eigen::AngleAxisd(t, Vector3::UnitY())));
           break;
-        default: break;
+        default:
+          break;
       }
     }
     clip.frames.push_back(q);
@@ -572,10 +593,13 @@ TEST(AssimpImport, OurOwnExportRoundTrips) {
     for (int i = 1; i < m->njoints; ++i) {
       const int j = im.link_index(m->link_name[i]);
       ASSERT_GT(j, 0) << m->link_name[i];
-      worst = std::max({worst, (a.X_W[i].R - b.X_W[j].R).cwiseAbs().maxCoeff(), (a.X_W[i].p - b.X_W[j].p).norm()});
+      worst = std::max({worst, (a.X_W[i].R - b.X_W[j].R).cwiseAbs().maxCoeff(),
+                        (a.X_W[i].p - b.X_W[j].p).norm()});
     }
   }
-  std::printf("  human48 -> glb -> assimp -> import: link world poses vs the original, max error %.3g\n", worst);
+  std::printf(
+      "  human48 -> glb -> assimp -> import: link world poses vs the original, max error %.3g\n",
+      worst);
   EXPECT_LE(worst, 1e-5);
   for (double d : s.dropped_offset) EXPECT_LE(d, 1e-6);
   expect_no_children();
@@ -584,7 +608,8 @@ TEST(AssimpImport, OurOwnExportRoundTrips) {
 // ---------------------------------------------------------------------------------------------
 // malformed input: a clear error naming the file, the parent alive, no child left
 
-void expect_import_error(const std::string& path, const std::string& expected,
+void expect_import_error(const std::string& path,
+                         const std::string& expected,
                          const io::ImportLimits& limits = {}) {
   try {
     io::import_skinned_file(path, limits);
@@ -619,7 +644,8 @@ TEST(AssimpImport, MalformedFilesGiveClearErrors) {
   expect_import_error(dir.path("model.obj"), "unsupported extension '.obj'");
   std::filesystem::create_directory(dir.path("folder.glb"));
   expect_import_error(dir.path("folder.glb"), "not a regular file");
-  gltf_test::write_bytes(dir.path("bad.gltf"), "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"children\": [0]}]}");
+  gltf_test::write_bytes(dir.path("bad.gltf"),
+                         "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"children\": [0]}]}");
   expect_import_error(dir.path("bad.gltf"), "");
 
   // a skeleton without a skinned mesh
@@ -641,8 +667,11 @@ TEST(AssimpImport, TruncatedGlbGivesAClearError) {
   gltf_test::TempDir dir;
   const auto bytes = gltf_test::read_bytes(data_file("CesiumMan.glb"));
   for (double fraction : {0.5, 0.05, 0.001}) {
-    const std::string path = dir.path("truncated_" + std::to_string(static_cast<int>(fraction * 1000)) + ".glb");
-    gltf_test::write_bytes(path, std::string(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
+    const std::string path =
+        dir.path("truncated_" + std::to_string(static_cast<int>(fraction * 1000)) + ".glb");
+    gltf_test::write_bytes(
+        path,
+        std::string(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
     expect_import_error(path, "");
   }
 }
@@ -656,8 +685,9 @@ TEST(AssimpImport, ChildOutOfMemoryIsReportedAndTheParentCarriesOn) {
     ASSERT_EQ(::ftruncate(fd, off_t{1} << 30), 0);
     ::close(fd);
   }
-  gltf_test::write_bytes(dir.path("big.gltf"),
-                         R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "big.bin", "byteLength": 1073741824}],
+  gltf_test::write_bytes(
+      dir.path("big.gltf"),
+      R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "big.bin", "byteLength": 1073741824}],
   "bufferViews": [{"buffer": 0, "byteLength": 1073741824}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 89478485, "type": "VEC3",
                  "min": [0, 0, 0], "max": [0, 0, 0]}],
@@ -676,8 +706,9 @@ TEST(AssimpImport, HangingImportIsStoppedAtTheDeadline) {
   // a .gltf whose buffer is a FIFO nobody writes: assimp blocks opening it
   gltf_test::TempDir dir;
   ASSERT_EQ(::mkfifo(dir.path("pipe.bin").c_str(), 0644), 0);
-  gltf_test::write_bytes(dir.path("hang.gltf"),
-                         R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "pipe.bin", "byteLength": 12}],
+  gltf_test::write_bytes(
+      dir.path("hang.gltf"),
+      R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "pipe.bin", "byteLength": 12}],
   "bufferViews": [{"buffer": 0, "byteLength": 12}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3",
                  "min": [0, 0, 0], "max": [0, 0, 0]}],
@@ -695,8 +726,9 @@ TEST(AssimpImport, FilesOutsideTheModelsFolderAreNotOpened) {
   std::filesystem::create_directory(dir.path("inner"));
   // a valid 12-byte buffer one folder up
   gltf_test::write_bytes(dir.path("outside.bin"), std::string(12, '\0'));
-  gltf_test::write_bytes(dir.path("inner/escape.gltf"),
-                         R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "../outside.bin", "byteLength": 12}],
+  gltf_test::write_bytes(
+      dir.path("inner/escape.gltf"),
+      R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "../outside.bin", "byteLength": 12}],
   "bufferViews": [{"buffer": 0, "byteLength": 12}],
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 1, "type": "VEC3",
                  "min": [0, 0, 0], "max": [0, 0, 0]}],

@@ -589,9 +589,11 @@ TEST(CharacterJson, ExtremeButFiniteValuesLoadAndRoundTrip) {
     "format": "pindrag-character", "version": 1, "gravity": [0, -1e-300, 0],
     "links": [
       {"name": "root", "joint": {"type": "free", "origin": {"xyz": [1e300, -0.0, 5e-324]}},
-       "inertial": {"mass": 1e-300, "com": [1e-10, 3e-9, 0], "inertia": {"ixx": 1e-310, "iyy": 1e-310, "izz": 1e-310}}},
+       "inertial": {"mass": 1e-300, "com": [1e-10, 3e-9, 0], )"
+                           R"("inertia": {"ixx": 1e-310, "iyy": 1e-310, "izz": 1e-310}}},
       {"name": "arm", "parent": "root",
-       "joint": {"type": "revolute", "axis": [1e200, 1e200, 0], "limits": {"lower": -1e308, "upper": 1e308}}},
+       "joint": {"type": "revolute", "axis": [1e200, 1e200, 0], )"
+                           R"("limits": {"lower": -1e308, "upper": 1e308}}},
       {"name": "leg", "parent": "root", "joint": {"type": "prismatic", "axis": [3e-5, 0, -4e-5]}}
     ]})";
   const LoadResult r = load(text);
@@ -612,9 +614,11 @@ TEST(CharacterJson, UnknownAndIgnoredKeysAreWarningsWithPointers) {
        "inertial": {"mass": 1, "inertia": {"ixx": 0.1, "iyy": 0.1, "izz": 0.1, "izx": 0}},
        "collision": [{"shape": "box", "size": [0.1, 0.1, 0.1], "radius": 0.3}]},
       {"name": "arm", "parent": "root",
-       "joint": {"type": "spherical", "limits": {"lower": 0}, "standard_orientation": [1, 0, 0, 0]}},
+       "joint": {"type": "spherical", "limits": {"lower": 0}, )"
+                           R"("standard_orientation": [1, 0, 0, 0]}},
       {"name": "leg", "parent": "root",
-       "joint": {"type": "revolute", "standard_orientation": [1, 0, 0, 0], "origin": {"xzy": [0, 0, 0]}}}
+       "joint": {"type": "revolute", "standard_orientation": [1, 0, 0, 0], )"
+                           R"("origin": {"xzy": [0, 0, 0]}}}
     ]})";
   const LoadResult r = load(text, "warn.json");
   std::set<std::string> w(r.warnings.begin(), r.warnings.end());
@@ -783,8 +787,8 @@ TEST(CharacterJson, TooManyRangeTrianglesAreRefused) {
              std::to_string(1 + (k + 1) % n) + "]";
   }
   range += "]}";
-  std::string text =
-      R"({"format": "pindrag-character", "version": 1, "links": [{"name": "r", "joint": {"type": "free"}})";
+  std::string text = R"({"format": "pindrag-character", "version": 1, )"
+                     R"("links": [{"name": "r", "joint": {"type": "free"}})";
   for (int j = 0; j < 9; ++j) {
     text += R"(, {"name": "s)" + std::to_string(j) +
             R"(", "parent": "r", "joint": {"type": "spherical", "range": )" + range + "}}";

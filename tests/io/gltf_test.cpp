@@ -14,8 +14,8 @@
 #include "core/data.hpp"
 #include "core/human_figure.hpp"
 #include "core/kinematics.hpp"
-#include "tests/io/gltf_reader.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/io/gltf_reader.hpp"
 
 namespace {
 
@@ -47,9 +47,14 @@ core::Clip synthetic_clip(const core::Model& m, int nframes, double dt = 1.0 / 3
       const int iq = m.idx_q[i];
       const double ph = 0.7 * i;
       switch (m.joint_type[i]) {
-        case JointType::kFixed: break;
-        case JointType::kRevolute: q[iq] = 1.2 * std::sin((0.9 + 0.1 * i) * t + ph); break;
-        case JointType::kPrismatic: q[iq] = 0.1 * std::sin(t + ph); break;
+        case JointType::kFixed:
+          break;
+        case JointType::kRevolute:
+          q[iq] = 1.2 * std::sin((0.9 + 0.1 * i) * t + ph);
+          break;
+        case JointType::kPrismatic:
+          q[iq] = 0.1 * std::sin(t + ph);
+          break;
         case JointType::kSpherical: {
           Vector3 w(1.5 * std::sin(0.8 * t + ph), 0.9 * std::sin(1.3 * t + 2 * ph),
                     1.1 * std::sin(0.5 * t + 3 * ph));
@@ -60,8 +65,8 @@ core::Clip synthetic_clip(const core::Model& m, int nframes, double dt = 1.0 / 3
           break;
         }
         case JointType::kFree: {
-          q.segment<3>(iq) = Vector3(0.8 * std::sin(0.7 * t), 0.05 * std::sin(3 * t),
-                                     1.5 * std::sin(0.21 * t));
+          q.segment<3>(iq) =
+              Vector3(0.8 * std::sin(0.7 * t), 0.05 * std::sin(3 * t), 1.5 * std::sin(0.21 * t));
           Quaternion r = Quaternion(Eigen::AngleAxisd(1.3 * t, Vector3::UnitY())) *
                          Quaternion(Eigen::AngleAxisd(0.3 * std::sin(1.1 * t), Vector3::UnitX()));
           if (r.w() < 0) r.coeffs() = -r.coeffs();
@@ -93,8 +98,10 @@ std::vector<int> node_of_link(const core::Model& m, const Json& doc) {
 double max_abs(const Eigen::MatrixXd& a) { return a.cwiseAbs().maxCoeff(); }
 
 // world matrices of every link node at every key equal FK of the clip frame
-void expect_keys_match_fk(const core::Model& m, const core::Clip& clip,
-                          const gltf_test::Document& doc, double tol) {
+void expect_keys_match_fk(const core::Model& m,
+                          const core::Clip& clip,
+                          const gltf_test::Document& doc,
+                          double tol) {
   const std::vector<int> node = node_of_link(m, doc.json);
   for (int i = 1; i < m.njoints; ++i) ASSERT_GE(node[i], 0) << "no node for " << m.link_name[i];
   const auto worlds = gltf_test::world_matrices_at_keys(doc, 0);
@@ -116,7 +123,9 @@ void expect_keys_match_fk(const core::Model& m, const core::Clip& clip,
 }
 
 // the structure a file of ours must have: TRS only, LINEAR, unit continuous quaternions
-void expect_structure(const core::Model& m, const core::Clip* clip, const gltf_test::Document& doc) {
+void expect_structure(const core::Model& m,
+                      const core::Clip* clip,
+                      const gltf_test::Document& doc) {
   const Json& j = doc.json;
   std::vector<std::string> errors;
   gltf_test::check_layout(doc, errors);
@@ -143,7 +152,8 @@ void expect_structure(const core::Model& m, const core::Clip* clip, const gltf_t
   int expected_channels = 0;
   for (int i = 1; i < m.njoints; ++i) {
     const JointType t = m.joint_type[i];
-    expected_channels += (t == JointType::kRevolute || t == JointType::kSpherical || t == JointType::kFree);
+    expected_channels +=
+        (t == JointType::kRevolute || t == JointType::kSpherical || t == JointType::kFree);
     expected_channels += (t == JointType::kPrismatic || t == JointType::kFree);
   }
   EXPECT_EQ(static_cast<int>(an["channels"].size()), expected_channels);
@@ -184,7 +194,8 @@ TEST(GltfExport, Human48ClipMatchesForwardKinematicsInGltfAndGlb) {
   const core::Clip clip = synthetic_clip(*m, 600);
   {
     std::vector<std::string> errors;
-    const gltf_test::Document doc = gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr), errors);
+    const gltf_test::Document doc =
+        gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr), errors);
     for (const auto& e : errors) ADD_FAILURE() << e;
     expect_structure(*m, &clip, doc);
     expect_keys_match_fk(*m, clip, doc, kFkTolerance);
@@ -205,8 +216,9 @@ TEST(GltfExport, QuaternionKeysAreMadeContinuousWhereTheClipJumps) {
   int jumps = 0;
   const int iq = m->idx_q[1] + 3;
   for (int k = 1; k < clip.size(); ++k) {
-    jumps += core::quaternion_at(clip.frames[k], iq).coeffs().dot(
-                 core::quaternion_at(clip.frames[k - 1], iq).coeffs()) < 0;
+    jumps += core::quaternion_at(clip.frames[k], iq)
+                 .coeffs()
+                 .dot(core::quaternion_at(clip.frames[k - 1], iq).coeffs()) < 0;
   }
   ASSERT_GT(jumps, 0);
   std::vector<std::string> errors;
@@ -215,16 +227,18 @@ TEST(GltfExport, QuaternionKeysAreMadeContinuousWhereTheClipJumps) {
   const Json& an = doc.json["animations"][0];
   for (const Json& ch : an["channels"]) {
     if (ch["target"]["node"] != 0 || ch["target"]["path"] != "rotation") continue;
-    const auto v = gltf_test::read_accessor(doc, an["samplers"][ch["sampler"].get<int>()]["output"]);
+    const auto v =
+        gltf_test::read_accessor(doc, an["samplers"][ch["sampler"].get<int>()]["output"]);
     int flipped = 0;
     for (int k = 0; k < clip.size(); ++k) {
       const Quaternion r = Quaternion(m->X_PJ[1].R) * core::quaternion_at(clip.frames[k], iq);
-      const double d = r.x() * v[4 * k] + r.y() * v[4 * k + 1] + r.z() * v[4 * k + 2] + r.w() * v[4 * k + 3];
+      const double d =
+          r.x() * v[4 * k] + r.y() * v[4 * k + 1] + r.z() * v[4 * k + 2] + r.w() * v[4 * k + 3];
       EXPECT_NEAR(std::abs(d), 1.0, 1e-6);
       flipped += d < 0;
       if (k > 0) {
-        EXPECT_GE(v[4 * k] * v[4 * k - 4] + v[4 * k + 1] * v[4 * k - 3] + v[4 * k + 2] * v[4 * k - 2] +
-                      v[4 * k + 3] * v[4 * k - 1],
+        EXPECT_GE(v[4 * k] * v[4 * k - 4] + v[4 * k + 1] * v[4 * k - 3] +
+                      v[4 * k + 2] * v[4 * k - 2] + v[4 * k + 3] * v[4 * k - 1],
                   0.0);
       }
     }
@@ -253,7 +267,8 @@ TEST(GltfExport, WithoutClipTheNodesHoldTheNeutralPoseAndTheSkinItsInverse) {
     EXPECT_EQ(M.row(3), Eigen::RowVector4d(0, 0, 0, 1));
     const int n = skin["joints"][j];
     int link = -1;
-    for (int i = 1; i < m->njoints; ++i) if (node[i] == n) link = i;
+    for (int i = 1; i < m->njoints; ++i)
+      if (node[i] == n) link = i;
     ASSERT_GT(link, 0);
     Eigen::Matrix4d W = Eigen::Matrix4d::Identity();
     W.topLeftCorner<3, 3>() = data.X_W[link].R;
@@ -344,7 +359,8 @@ TEST(GltfExport, SkinnedMeshAttributesAreValidAndSkinLikeOurModel) {
   const size_t njoints = j["skins"][0]["joints"].size();
   // the mesh node: a root with an identity transform
   int mesh_node = -1;
-  for (size_t n = 0; n < j["nodes"].size(); ++n) if (j["nodes"][n].contains("mesh")) mesh_node = static_cast<int>(n);
+  for (size_t n = 0; n < j["nodes"].size(); ++n)
+    if (j["nodes"][n].contains("mesh")) mesh_node = static_cast<int>(n);
   ASSERT_GE(mesh_node, 0);
   EXPECT_FALSE(j["nodes"][mesh_node].contains("translation"));
   EXPECT_FALSE(j["nodes"][mesh_node].contains("rotation"));
@@ -389,8 +405,8 @@ TEST(GltfExport, SkinnedMeshAttributesAreValidAndSkinLikeOurModel) {
       for (int c = 0; c < 4; ++c) {
         if (ww[c] == 0) continue;
         const int link = skin.bones[jw[c]];
-        p_ours += (ww[c] / total) * (data.X_W[link] * (skin.inverse_bind[jw[c]] *
-                                                       skin.positions[v].cast<double>()));
+        p_ours += (ww[c] / total) *
+                  (data.X_W[link] * (skin.inverse_bind[jw[c]] * skin.positions[v].cast<double>()));
       }
       worst = std::max(worst, (p_file.head<3>() - p_ours).norm());
     }
@@ -405,7 +421,8 @@ TEST(GltfExport, StickFigureBoxesAreRigidlySkinnedToTheirLinks) {
   o.stick_figure = true;
   o.stick_radius = 0.01;
   std::vector<std::string> errors;
-  const gltf_test::Document doc = gltf_test::parse_glb(io::write_glb(*m, nullptr, nullptr, o), errors);
+  const gltf_test::Document doc =
+      gltf_test::parse_glb(io::write_glb(*m, nullptr, nullptr, o), errors);
   for (const auto& e : errors) ADD_FAILURE() << e;
   expect_structure(*m, nullptr, doc);
   const Json& j = doc.json;
@@ -424,10 +441,12 @@ TEST(GltfExport, StickFigureBoxesAreRigidlySkinnedToTheirLinks) {
     ASSERT_EQ(wgt[4 * v], 1.0);
     const int n = j["skins"][0]["joints"][static_cast<int>(jnt[4 * v])];
     int link = -1;
-    for (int i = 1; i < m->njoints; ++i) if (node[i] == n) link = i;
+    for (int i = 1; i < m->njoints; ++i)
+      if (node[i] == n) link = i;
     ASSERT_GT(link, 0);
     ++vertices_of_link[link];
-    const Vector3 p_L = data.X_W[link].inverse_apply(Vector3(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
+    const Vector3 p_L =
+        data.X_W[link].inverse_apply(Vector3(pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]));
     double best = p_L.norm();
     for (int c = link + 1; c < m->subtree_end[link]; ++c) {
       if (m->parent[c] != link) continue;
@@ -597,7 +616,7 @@ TEST(GltfExport, ThreeJsGltfLoaderSeesOurForwardKinematics) {
   for (const char* name : {"h.gltf", "h.glb", "h_stick.glb"}) {
     const std::string path = dir.path(name);
     io::save_gltf_file(path, *m, &clip, nullptr,
-                             std::string(name) == "h_stick.glb" ? stick : io::GltfExportOptions{});
+                       std::string(name) == "h_stick.glb" ? stick : io::GltfExportOptions{});
     const Json r = gltf_test::three_read(path, "keys");
     ASSERT_EQ(r["animations"], 1);
     // three.js made every link a Bone (the skin lists them all)
@@ -613,7 +632,8 @@ TEST(GltfExport, ThreeJsGltfLoaderSeesOurForwardKinematics) {
         const Json& f = r["frames"][k][node[i]];
         ASSERT_TRUE(f.is_array()) << m->link_name[i];
         const Vector3 p(f[0].get<double>(), f[1].get<double>(), f[2].get<double>());
-        const Quaternion q(f[6].get<double>(), f[3].get<double>(), f[4].get<double>(), f[5].get<double>());
+        const Quaternion q(f[6].get<double>(), f[3].get<double>(), f[4].get<double>(),
+                           f[5].get<double>());
         worst_p = std::max(worst_p, (p - data.X_W[i].p).norm());
         worst_r = std::max(worst_r, max_abs(q.toRotationMatrix() - data.X_W[i].R));
       }
@@ -644,8 +664,8 @@ TEST(GltfExport, AssimpCliReadsOurGltfAndGlb) {
     if (w.label.rfind("human48", 0) != 0) continue;
     // skeleton-only files need the raw import: assimp's default post-processing drops the
     // materials no mesh uses and then refuses a scene without any ("No materials remaining")
-    const bool has_mesh = w.label.find("stick") != std::string::npos ||
-                          w.label.find("skinned") != std::string::npos;
+    const bool has_mesh =
+        w.label.find("stick") != std::string::npos || w.label.find("skinned") != std::string::npos;
     const gltf_test::CommandResult r =
         gltf_test::run("assimp info " + gltf_test::quote(w.path) + (has_mesh ? "" : " -r"), true);
     ASSERT_EQ(r.status, 0) << w.label << "\n" << r.out;
@@ -653,9 +673,11 @@ TEST(GltfExport, AssimpCliReadsOurGltfAndGlb) {
     // nodes: the links, the mesh nodes, and the root assimp adds above several scene roots;
     // bones: assimp makes one per skin joint for each skinned mesh
     const int meshes = w.label.find("skinned") != std::string::npos ? 2
-                       : w.label.find("stick") != std::string::npos ? 1 : 0;
+                       : w.label.find("stick") != std::string::npos ? 1
+                                                                    : 0;
     EXPECT_EQ(info_count(r.out, "Nodes:"), m->nlinks() + meshes + (meshes > 0 ? 1 : 0))
-        << w.label << "\n" << r.out;
+        << w.label << "\n"
+        << r.out;
     EXPECT_EQ(info_count(r.out, "Bones:"), meshes * m->nlinks()) << w.label;
     const bool has_clip = w.label.find("skeleton") == std::string::npos;
     EXPECT_EQ(info_count(r.out, "Animation Channels:"), has_clip ? animated : 0) << w.label;

@@ -19,8 +19,8 @@
 #include <map>
 
 #include "core/configuration.hpp"
-#include "io/urdf.hpp"
 #include "core/kinematics.hpp"
+#include "io/urdf.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {

@@ -14,10 +14,10 @@
 #include <sstream>
 
 #include "core/configuration.hpp"
+#include "core/kinematics.hpp"
 #include "io/character_json.hpp"
 #include "io/model_file.hpp"
 #include "io/xml_prescan.hpp"
-#include "core/kinematics.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/fixtures/kinematics_checks.hpp"
 
@@ -239,7 +239,8 @@ TEST(UrdfJoints, EveryTypeMapsToOurs) {
     <axis xyz="0 0 1"/><limit effort="5" velocity="7"/></joint>
   <joint name="slide" type="prismatic"><parent link="base"/><child link="slider"/>
     <axis xyz="1 0 0"/><limit lower="-0.1" upper="0.2" effort="50" velocity="0.5"/></joint>
-  <joint name="weld" type="fixed"><origin xyz="0 0 1"/><parent link="base"/><child link="bolt"/></joint>
+  <joint name="weld" type="fixed"><origin xyz="0 0 1"/>)"
+                                  R"(<parent link="base"/><child link="bolt"/></joint>
   <joint name="thrown" type="floating"><parent link="bolt"/><child link="prop"/></joint>)"));
   const core::Model& m = *r.model;
   const int wheel = m.link_index("wheel"), slider = m.link_index("slider");
@@ -376,11 +377,13 @@ TEST(UrdfRoot, MassiveWorldLinkIsAnOrdinaryLink) {
 // what is not imported is named
 
 TEST(UrdfWarnings, UnsupportedElementsAreNamed) {
-  const LoadResult r = load(robot(R"(
+  const LoadResult r =
+      load(robot(R"(
   <link name="base">
     <visual><geometry><box size="1 1 1"/></geometry><material name="red"/></visual>
     <visual><geometry><cone radius="1" height="2"/></geometry></visual>
-    <collision><origin xyz="0 0 0.5"/><geometry><capsule radius="0.1" length="0.3"/></geometry></collision>
+    <collision><origin xyz="0 0 0.5"/>)"
+                 R"(<geometry><capsule radius="0.1" length="0.3"/></geometry></collision>
     <collision><geometry><sphere radius="0.2"/></geometry></collision>
     <sensor_plate/>
   </link>
@@ -444,9 +447,8 @@ TEST(UrdfWarnings, ManyWarningsAreCountedNotListed) {
   ASSERT_EQ(r.warnings.size(), io::kMaxUrdfWarnings);
   EXPECT_EQ(r.warnings.front(),
             "test.urdf: link 'a': <extra0> (line 3) is not supported and is ignored");
-  EXPECT_EQ(r.warnings.back(),
-            "test.urdf: " + std::to_string(1500 - (io::kMaxUrdfWarnings - 1)) +
-                " more warnings are not listed");
+  EXPECT_EQ(r.warnings.back(), "test.urdf: " + std::to_string(1500 - (io::kMaxUrdfWarnings - 1)) +
+                                   " more warnings are not listed");
 }
 
 TEST(UrdfWarnings, UrdfdomErrorsAreFatalAndCarryItsMessage) {

@@ -28,7 +28,8 @@ fs::path make_web_root(const fs::path& base) {
   fs::create_directories(root / "node_modules" / "three" / "build");
   std::ofstream(root / "index.html") << "<!doctype html><title>pindrag</title>";
   std::ofstream(root / "js" / "main.js") << "export const ok = 1;";
-  std::ofstream(root / "node_modules" / "three" / "build" / "three.module.js") << "export const REVISION = '0';";
+  std::ofstream(root / "node_modules" / "three" / "build" / "three.module.js")
+      << "export const REVISION = '0';";
   std::ofstream(root / "node_modules" / "three" / "package.json") << "{\"secret\": true}";
   std::ofstream(base / "secret.txt") << "root:x:0:0:secret";
   fs::create_symlink(base / "secret.txt", root / "link_out.txt");
@@ -78,8 +79,8 @@ class ServerTest : public ::testing::Test {
   };
   Created create_session(const std::string& character = "human48") {
     auto c = http();
-    const auto res = c.Post("/api/sessions", {{"Origin", origin()}}, json{{"character", character}}.dump(),
-                            "application/json");
+    const auto res = c.Post("/api/sessions", {{"Origin", origin()}},
+                            json{{"character", character}}.dump(), "application/json");
     EXPECT_TRUE(res);
     if (!res) return {};
     EXPECT_EQ(res->status, 201) << res->body;
@@ -94,7 +95,8 @@ class ServerTest : public ::testing::Test {
     return json::parse(res->body);
   }
   std::unique_ptr<WsClient> connect(const Created& s) {
-    auto ws = std::make_unique<WsClient>(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin());
+    auto ws = std::make_unique<WsClient>(server_->ws_port(),
+                                         "/ws?session=" + s.id + "&token=" + s.token, origin());
     ws->send({{"type", "hello"}, {"protocol", 1}});
     return ws;
   }
@@ -160,7 +162,8 @@ TEST_F(ServerTest, SnapshotOverHttpNeedsTheToken) {
   ASSERT_EQ(links.size(), snap.at("character").at("links").size());
   ASSERT_GT(links.size(), 10u);
   EXPECT_EQ(links[0].at("p").size(), 3u);
-  EXPECT_TRUE(snap.contains("pins") && snap.contains("keys") && snap.contains("clip") && snap.contains("settings"));
+  EXPECT_TRUE(snap.contains("pins") && snap.contains("keys") && snap.contains("clip") &&
+              snap.contains("settings"));
 
   auto c = http();
   auto res = c.Get("/api/sessions/" + s.id);
@@ -171,9 +174,11 @@ TEST_F(ServerTest, SnapshotOverHttpNeedsTheToken) {
   EXPECT_EQ(res->status, 401);
   res = c.Get("/api/sessions/" + std::string(32, 'b'), {{"X-Session-Token", s.token}});
   EXPECT_EQ(res->status, 404);
-  res = c.Post("/api/sessions", {{"Origin", origin()}}, R"({"character": "/etc/passwd"})", "application/json");
+  res = c.Post("/api/sessions", {{"Origin", origin()}}, R"({"character": "/etc/passwd"})",
+               "application/json");
   EXPECT_EQ(res->status, 400);
-  EXPECT_NE(json::parse(res->body).at("error").get<std::string>().find("character"), std::string::npos);
+  EXPECT_NE(json::parse(res->body).at("error").get<std::string>().find("character"),
+            std::string::npos);
 }
 
 TEST_F(ServerTest, ProtocolEndToEnd) {
@@ -198,7 +203,8 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
   ASSERT_EQ(pose.links, links.size());
   EXPECT_EQ(pose.last_seq, 0u);
   for (size_t i = 0; i < links.size(); ++i) {
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(pose.values[i][k], links[i].at("p")[k].get<double>(), 1e-5);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(pose.values[i][k], links[i].at("p")[k].get<double>(), 1e-5);
   }
 
   int hand = -1;
@@ -220,7 +226,8 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
   request(*ws, {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}}, 2);
   for (std::uint32_t seq = 1; seq <= 30; ++seq) {
     const double a = seq / 30.0;
-    ws->send({{"type", "drag_move"}, {"seq", seq},
+    ws->send({{"type", "drag_move"},
+              {"seq", seq},
               {"target", {start[0], start[1] + 0.1 * a, start[2] + 0.1 * a}}});
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
@@ -232,7 +239,8 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
     if (m.text) continue;
     pose = server_test::decode_pose(m.data);
     if (pose.last_seq != 30) continue;
-    distance = std::hypot(pose.values[hand][0] - goal[0], pose.values[hand][1] - goal[1], pose.values[hand][2] - goal[2]);
+    distance = std::hypot(pose.values[hand][0] - goal[0], pose.values[hand][1] - goal[1],
+                          pose.values[hand][2] - goal[2]);
   }
   EXPECT_LT(distance, 0.01) << "the hand did not reach the drag target";
   request(*ws, {{"type", "drag_end"}}, 3);
@@ -250,13 +258,15 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
   ws->send({{"type", "pin"}, {"link", "tail"}, {"id", 8}});
   json error = ws->read_until("error");
   EXPECT_EQ(error.at("id"), 8);
-  EXPECT_NE(error.at("message").get<std::string>().find("pin.link"), std::string::npos) << error.dump();
+  EXPECT_NE(error.at("message").get<std::string>().find("pin.link"), std::string::npos)
+      << error.dump();
   ws->send({{"type", "drag_move"}, {"seq", 31}, {"target", {0, "x", 0}}, {"id", 9}});
   error = ws->read_until("error");
   EXPECT_EQ(error.at("id"), 9);
   EXPECT_NE(error.at("message").get<std::string>().find("drag_move.target"), std::string::npos);
   ws->send({{"type", "teleport"}, {"id", 10}});
-  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("teleport"), std::string::npos);
+  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("teleport"),
+            std::string::npos);
 
   // export of the keyed animation
   auto c = http();
@@ -264,7 +274,9 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 200);
   EXPECT_EQ(res->body.rfind("HIERARCHY", 0), 0u);
-  EXPECT_NE(res->get_header_value("Content-Disposition").find("attachment; filename=\"human48.bvh\""), std::string::npos);
+  EXPECT_NE(
+      res->get_header_value("Content-Disposition").find("attachment; filename=\"human48.bvh\""),
+      std::string::npos);
   res = c.Get("/api/sessions/" + s.id + "/export?format=glb", {{"X-Session-Token", s.token}});
   ASSERT_TRUE(res);
   EXPECT_EQ(res->body.substr(0, 4), "glTF");
@@ -275,7 +287,8 @@ TEST_F(ServerTest, ProtocolEndToEnd) {
 TEST_F(ServerTest, ThumbnailIsAPngOfTheAskedSize) {
   const Created s = create_session();
   auto c = http();
-  auto res = c.Get("/api/sessions/" + s.id + "/thumbnail.png?size=64", {{"X-Session-Token", s.token}});
+  auto res =
+      c.Get("/api/sessions/" + s.id + "/thumbnail.png?size=64", {{"X-Session-Token", s.token}});
   ASSERT_TRUE(res);
   if (res->status == 501) GTEST_SKIP() << "built without the thumbnail renderer";
   ASSERT_EQ(res->status, 200) << res->body;
@@ -284,12 +297,15 @@ TEST_F(ServerTest, ThumbnailIsAPngOfTheAskedSize) {
   EXPECT_EQ(res->body.substr(1, 3), "PNG");
   // IHDR width and height, big-endian at bytes 16..23
   auto be32 = [&](size_t at) {
-    return (static_cast<unsigned char>(res->body[at]) << 24) | (static_cast<unsigned char>(res->body[at + 1]) << 16) |
-           (static_cast<unsigned char>(res->body[at + 2]) << 8) | static_cast<unsigned char>(res->body[at + 3]);
+    return (static_cast<unsigned char>(res->body[at]) << 24) |
+           (static_cast<unsigned char>(res->body[at + 1]) << 16) |
+           (static_cast<unsigned char>(res->body[at + 2]) << 8) |
+           static_cast<unsigned char>(res->body[at + 3]);
   };
   EXPECT_EQ(be32(16), 64);
   EXPECT_EQ(be32(20), 64);
-  for (const std::string& bad : std::vector<std::string>{"size=8", "size=2000", "size=abc", "frame=5"}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"size=8", "size=2000", "size=abc", "frame=5"}) {
     res = c.Get("/api/sessions/" + s.id + "/thumbnail.png?" + bad, {{"X-Session-Token", s.token}});
     ASSERT_TRUE(res);
     EXPECT_EQ(res->status, 400) << bad;
@@ -316,7 +332,10 @@ TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
   const auto t0 = std::chrono::steady_clock::now();
   for (int seq = 1; seq <= kBurst; ++seq) {
     const double a = 0.1 * seq / kBurst;
-    ws->send({{"type", "drag_move"}, {"seq", seq}, {"id", seq}, {"target", {start[0] + a, start[1], start[2] + a}}});
+    ws->send({{"type", "drag_move"},
+              {"seq", seq},
+              {"id", seq},
+              {"target", {start[0] + a, start[1], start[2] + a}}});
   }
   int next_ack = 1;
   std::uint32_t newest_seq_seen = 0;
@@ -333,17 +352,19 @@ TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
     EXPECT_EQ(j.at("request"), "drag_move");
     ++next_ack;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const server::ActorStats after = actor->stats();
   const auto applied = after.drag_samples_applied - before.drag_samples_applied;
   const auto ticks = after.ticks - before.ticks;
-  EXPECT_EQ(after.drag_samples_received - before.drag_samples_received, static_cast<unsigned>(kBurst));
+  EXPECT_EQ(after.drag_samples_received - before.drag_samples_received,
+            static_cast<unsigned>(kBurst));
   // superseded samples were dropped: far fewer applications and ticks than samples
   EXPECT_LT(applied, 200u) << "applied " << applied;
   EXPECT_LT(ticks, 200u) << "ticks " << ticks;
   EXPECT_LT(seconds, 5.0);
-  std::cout << "burst of " << kBurst << " drag_moves: " << applied << " applied, " << ticks << " ticks, "
-            << seconds * 1e3 << " ms until the last ack\n";
+  std::cout << "burst of " << kBurst << " drag_moves: " << applied << " applied, " << ticks
+            << " ticks, " << seconds * 1e3 << " ms until the last ack\n";
 }
 
 TEST_F(ServerTest, ReconnectRestoresPinsKeysAndLayers) {
@@ -367,7 +388,9 @@ TEST_F(ServerTest, ReconnectRestoresPinsKeysAndLayers) {
     request(*ws, {{"type", "play"}}, 6);
     request(*ws, {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", hand}}, 7);
     for (std::uint32_t seq = 1; seq <= 10; ++seq) {
-      ws->send({{"type", "drag_move"}, {"seq", seq}, {"target", {hand[0], hand[1] + 0.01 * seq, hand[2]}}});
+      ws->send({{"type", "drag_move"},
+                {"seq", seq},
+                {"target", {hand[0], hand[1] + 0.01 * seq, hand[2]}}});
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     request(*ws, {{"type", "drag_end"}}, 8);
@@ -412,26 +435,30 @@ TEST_F(ServerTest, RestartRestoresSessions) {
 
 TEST_F(ServerTest, BadHostIsRefused) {
   auto c = http();
-  for (const std::string& host : std::vector<std::string>{"evil.example", "evil.example:" + std::to_string(server_->http_port()),
-                                  "127.0.0.1:1", "localhost.evil.example:" + std::to_string(server_->http_port())}) {
+  for (const std::string& host : std::vector<std::string>{
+           "evil.example", "evil.example:" + std::to_string(server_->http_port()), "127.0.0.1:1",
+           "localhost.evil.example:" + std::to_string(server_->http_port())}) {
     const auto res = c.Get("/api/health", {{"Host", host}});
     ASSERT_TRUE(res);
     EXPECT_EQ(res->status, 403) << host;
     EXPECT_TRUE(json::parse(res->body).contains("error"));
   }
-  const auto ok = c.Get("/api/health", {{"Host", "localhost:" + std::to_string(server_->http_port())}});
+  const auto ok =
+      c.Get("/api/health", {{"Host", "localhost:" + std::to_string(server_->http_port())}});
   EXPECT_EQ(ok->status, 200);
   // the WebSocket checks the Host of its own port
   const Created s = create_session();
-  EXPECT_THROW(WsClient(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin(), "evil.example"),
+  EXPECT_THROW(WsClient(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin(),
+                        "evil.example"),
                std::runtime_error);
 }
 
 TEST_F(ServerTest, EvilOriginIsRefused) {
   const Created s = create_session();
   const std::string target = "/ws?session=" + s.id + "&token=" + s.token;
-  for (const std::string& evil : std::vector<std::string>{"http://evil.example", "null", origin() + ".evil.example", "https://127.0.0.1:" +
-                                     std::to_string(server_->http_port())}) {
+  for (const std::string& evil :
+       std::vector<std::string>{"http://evil.example", "null", origin() + ".evil.example",
+                                "https://127.0.0.1:" + std::to_string(server_->http_port())}) {
     try {
       WsClient ws(server_->ws_port(), target, evil);
       ADD_FAILURE() << "upgrade accepted with Origin " << evil;
@@ -440,14 +467,15 @@ TEST_F(ServerTest, EvilOriginIsRefused) {
     }
   }
   try {
-    WsClient ws(server_->ws_port(), "/ws?session=" + s.id + "&token=" + std::string(32, '0'), origin());
+    WsClient ws(server_->ws_port(), "/ws?session=" + s.id + "&token=" + std::string(32, '0'),
+                origin());
     ADD_FAILURE() << "upgrade accepted with a wrong token";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("status 401"), std::string::npos) << e.what();
   }
   auto c = http();
-  const auto res = c.Post("/api/sessions", {{"Origin", "http://evil.example"}}, R"({"character": "human48"})",
-                          "application/json");
+  const auto res = c.Post("/api/sessions", {{"Origin", "http://evil.example"}},
+                          R"({"character": "human48"})", "application/json");
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 403);
   // the right Origin and token connect
@@ -456,14 +484,16 @@ TEST_F(ServerTest, EvilOriginIsRefused) {
 
 TEST_F(ServerTest, PathTraversalCorpusGets4xx) {
   const std::string host = "Host: 127.0.0.1:" + std::to_string(server_->http_port()) + "\r\n";
-  for (const std::string& path : std::vector<std::string>{"/../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd", "/%2e%2e%2f%2e%2e%2fetc/passwd",
-        "/%5c..%5c..%5cetc%5cpasswd", "/js%5c..%5c..%5csecret.txt", "//etc/passwd", "/js/../../secret.txt",
-        "/js/%2e%2e/%2e%2e/secret.txt", "/link_out.txt", "/node_modules/three/package.json",
-        "/vendor/three/package.json", "/vendor/three/build/../../../secret.txt",
-        "/vendor/three/build/%2e%2e/%2e%2e/%2e%2e/secret.txt", "/.git/config", "/%00index.html",
-        "/etc/passwd", "/" + fs::absolute(base_ / "secret.txt").string(), "../secret.txt"}) {
-    const auto reply = server_test::raw_http(server_->http_port(),
-                                             "GET " + path + " HTTP/1.1\r\n" + host + "Connection: close\r\n\r\n");
+  for (const std::string& path : std::vector<std::string>{
+           "/../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2fetc%2fpasswd",
+           "/%2e%2e%2f%2e%2e%2fetc/passwd", "/%5c..%5c..%5cetc%5cpasswd",
+           "/js%5c..%5c..%5csecret.txt", "//etc/passwd", "/js/../../secret.txt",
+           "/js/%2e%2e/%2e%2e/secret.txt", "/link_out.txt", "/node_modules/three/package.json",
+           "/vendor/three/package.json", "/vendor/three/build/../../../secret.txt",
+           "/vendor/three/build/%2e%2e/%2e%2e/%2e%2e/secret.txt", "/.git/config", "/%00index.html",
+           "/etc/passwd", "/" + fs::absolute(base_ / "secret.txt").string(), "../secret.txt"}) {
+    const auto reply = server_test::raw_http(
+        server_->http_port(), "GET " + path + " HTTP/1.1\r\n" + host + "Connection: close\r\n\r\n");
     EXPECT_GE(reply.status, 400) << path;
     EXPECT_LT(reply.status, 500) << path;
     EXPECT_EQ(reply.body.find("root:"), std::string::npos) << path;
@@ -476,14 +506,18 @@ TEST_F(ServerTest, PathTraversalCorpusGets4xx) {
 TEST_F(ServerTest, OversizeUploadGets413) {
   const Created s = create_session();
   httplib::MultipartFormDataItems items{
-      {"clip", std::string((std::size_t{64} << 20) + (std::size_t{1} << 20), 'x'), "huge.bvh", "application/octet-stream"}};
+      {"clip", std::string((std::size_t{64} << 20) + (std::size_t{1} << 20), 'x'), "huge.bvh",
+       "application/octet-stream"}};
   auto c = http();
-  const auto res = c.Post("/api/sessions/" + s.id + "/clip", {{"X-Session-Token", s.token}, {"Origin", origin()}}, items);
+  const auto res = c.Post("/api/sessions/" + s.id + "/clip",
+                          {{"X-Session-Token", s.token}, {"Origin", origin()}}, items);
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 413);
   // a small upload that is not a BVH is a 4xx naming the field
-  httplib::MultipartFormDataItems bad{{"clip", "HIERARCHY\nROOT x {\n", "broken.bvh", "text/plain"}};
-  const auto res2 = c.Post("/api/sessions/" + s.id + "/clip", {{"X-Session-Token", s.token}, {"Origin", origin()}}, bad);
+  httplib::MultipartFormDataItems bad{
+      {"clip", "HIERARCHY\nROOT x {\n", "broken.bvh", "text/plain"}};
+  const auto res2 = c.Post("/api/sessions/" + s.id + "/clip",
+                           {{"X-Session-Token", s.token}, {"Origin", origin()}}, bad);
   ASSERT_TRUE(res2);
   EXPECT_EQ(res2->status, 422);
   EXPECT_NE(json::parse(res2->body).at("error").get<std::string>().find("clip"), std::string::npos);
@@ -512,30 +546,31 @@ TEST_F(ServerTest, MalformedMessagesGetErrorsAndTheServerSurvives) {
   const Created s = create_session();
   auto ws = connect(s);
   ws->read_until("snapshot");
-  for (const std::string& text : std::vector<std::string>{"{", "[]", "42", "{\"type\": 7}", "{\"no_type\": 1}",
-                                 "{\"type\": \"drag_move\", \"seq\": -1, \"target\": [0, 0, 0]}",
-                                 "{\"type\": \"pin\", \"link\": \"l_foot\", \"mode\": \"glue\"}",
-                                 "{\"type\": \"seek\", \"time\": 1e400}"}) {
+  for (const std::string& text :
+       std::vector<std::string>{"{", "[]", "42", "{\"type\": 7}", "{\"no_type\": 1}",
+                                "{\"type\": \"drag_move\", \"seq\": -1, \"target\": [0, 0, 0]}",
+                                "{\"type\": \"pin\", \"link\": \"l_foot\", \"mode\": \"glue\"}",
+                                "{\"type\": \"seek\", \"time\": 1e400}"}) {
     ws->send_text(text);
     const json error = ws->read_until("error");
     EXPECT_FALSE(error.at("message").get<std::string>().empty()) << text;
   }
   ws->send_binary(std::string("PDPF\x01\x00\xff\xff", 8));
-  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("binary"), std::string::npos);
+  EXPECT_NE(ws->read_until("error").at("message").get<std::string>().find("binary"),
+            std::string::npos);
   // the connection still works
   request(*ws, {{"type", "pin"}, {"link", "l_foot"}}, 99);
   // an unknown protocol version closes with 1002
-  auto other = std::make_unique<WsClient>(server_->ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin());
+  auto other = std::make_unique<WsClient>(server_->ws_port(),
+                                          "/ws?session=" + s.id + "&token=" + s.token, origin());
   other->send({{"type", "hello"}, {"protocol", 2}});
-  EXPECT_THROW(
-      for (int k = 0; k < 100; ++k) other->read(), std::runtime_error);
+  EXPECT_THROW(for (int k = 0; k < 100; ++k) other->read(), std::runtime_error);
   EXPECT_EQ(other->close_code(), 1002);
   // a text frame that is not UTF-8 breaks the WebSocket protocol itself: close 1007 (RFC 6455)
   auto garbled = connect(s);
   garbled->read_until("snapshot");
   garbled->send_text("\xff\xfe garbage");
-  EXPECT_THROW(
-      for (int k = 0; k < 100; ++k) garbled->read(), std::runtime_error);
+  EXPECT_THROW(for (int k = 0; k < 100; ++k) garbled->read(), std::runtime_error);
   EXPECT_EQ(garbled->close_code(), 1007);
   auto c = http();
   EXPECT_EQ(c.Get("/api/health")->status, 200);

@@ -24,7 +24,9 @@ constexpr auto kReadTimeout = std::chrono::seconds(10);
 
 // Runs the asynchronous operations started on `ioc` until they finish or `timeout` passes; then
 // the socket is closed (which ends them) and false is returned, so a test fails instead of hanging.
-bool run_for(asio::io_context& ioc, tcp::socket& socket, std::chrono::steady_clock::duration timeout) {
+bool run_for(asio::io_context& ioc,
+             tcp::socket& socket,
+             std::chrono::steady_clock::duration timeout) {
   ioc.restart();
   ioc.run_for(timeout);
   if (ioc.stopped()) return true;
@@ -46,7 +48,8 @@ PoseFrame decode_pose(const std::string& b) {
   std::memcpy(&f.frame_id, b.data() + 8, 4);
   std::memcpy(&f.last_seq, b.data() + 12, 4);
   std::memcpy(&f.time, b.data() + 16, 8);
-  if (b.size() != 36 + 44 * static_cast<size_t>(f.links)) throw std::runtime_error("pose frame size mismatch");
+  if (b.size() != 36 + 44 * static_cast<size_t>(f.links))
+    throw std::runtime_error("pose frame size mismatch");
   f.values.resize(f.links);
   for (size_t i = 0; i < f.links; ++i) std::memcpy(f.values[i].data(), b.data() + 36 + 44 * i, 44);
   return f;
@@ -58,7 +61,10 @@ struct WsClient::Impl {
   beast::flat_buffer buffer;
 };
 
-WsClient::WsClient(int port, const std::string& target, const std::string& origin, const std::string& host)
+WsClient::WsClient(int port,
+                   const std::string& target,
+                   const std::string& origin,
+                   const std::string& host)
     : impl_(new Impl) {
   try {
     tcp::endpoint endpoint(asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port));
@@ -68,13 +74,17 @@ WsClient::WsClient(int port, const std::string& target, const std::string& origi
     impl_->ws.set_option(websocket::stream_base::decorator([origin](websocket::request_type& req) {
       if (!origin.empty()) req.set(http::field::origin, origin);
     }));
-    // the asynchronous handshake keeps the response of a refused upgrade (the blocking one drops it)
+    // the asynchronous handshake keeps the response of a refused upgrade (the blocking one drops
+    // it)
     websocket::response_type response;
     beast::error_code ec;
-    impl_->ws.async_handshake(response, host.empty() ? "127.0.0.1:" + std::to_string(port) : host, target,
-                              [&ec](beast::error_code result) { ec = result; });
-    if (!run_for(impl_->ioc, impl_->ws.next_layer(), kReadTimeout)) throw std::runtime_error("handshake: timed out");
-    if (ec) throw std::runtime_error("status " + std::to_string(response.result_int()) + ": " + ec.message());
+    impl_->ws.async_handshake(response, host.empty() ? "127.0.0.1:" + std::to_string(port) : host,
+                              target, [&ec](beast::error_code result) { ec = result; });
+    if (!run_for(impl_->ioc, impl_->ws.next_layer(), kReadTimeout))
+      throw std::runtime_error("handshake: timed out");
+    if (ec)
+      throw std::runtime_error("status " + std::to_string(response.result_int()) + ": " +
+                               ec.message());
   } catch (...) {
     delete impl_;
     throw;
@@ -102,8 +112,10 @@ void WsClient::send_binary(const std::string& bytes) {
 WsMessage WsClient::read(std::chrono::milliseconds timeout) {
   impl_->buffer.clear();
   beast::error_code ec;
-  impl_->ws.async_read(impl_->buffer, [&ec](beast::error_code result, std::size_t) { ec = result; });
-  if (!run_for(impl_->ioc, impl_->ws.next_layer(), timeout)) throw std::runtime_error("read: timed out");
+  impl_->ws.async_read(impl_->buffer,
+                       [&ec](beast::error_code result, std::size_t) { ec = result; });
+  if (!run_for(impl_->ioc, impl_->ws.next_layer(), timeout))
+    throw std::runtime_error("read: timed out");
   if (ec) throw std::runtime_error("read: " + ec.message());
   return WsMessage{impl_->ws.got_text(), beast::buffers_to_string(impl_->buffer.data())};
 }
@@ -128,7 +140,8 @@ void WsClient::close() {
 HttpReply raw_http(int port, const std::string& request) {
   asio::io_context ioc;
   tcp::socket socket(ioc);
-  socket.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)));
+  socket.connect(
+      tcp::endpoint(asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)));
   asio::write(socket, asio::buffer(request));
   // read until the server closes or one whole response (by Content-Length) has arrived
   std::string reply;
@@ -139,7 +152,8 @@ HttpReply raw_http(int port, const std::string& request) {
       if (ec) return;
       const size_t header_end = reply.find("\r\n\r\n");
       const size_t length_at = reply.find("Content-Length: ");
-      if (header_end != std::string::npos && length_at != std::string::npos && length_at < header_end) {
+      if (header_end != std::string::npos && length_at != std::string::npos &&
+          length_at < header_end) {
         const size_t length = std::stoul(reply.substr(length_at + 16));
         if (reply.size() >= header_end + 4 + length) return;
       }
@@ -149,7 +163,8 @@ HttpReply raw_http(int port, const std::string& request) {
   read_more();
   if (!run_for(ioc, socket, kReadTimeout)) throw std::runtime_error("HTTP reply: timed out");
   HttpReply out;
-  if (reply.rfind("HTTP/1.", 0) == 0 && reply.size() > 12) out.status = std::stoi(reply.substr(9, 3));
+  if (reply.rfind("HTTP/1.", 0) == 0 && reply.size() > 12)
+    out.status = std::stoi(reply.substr(9, 3));
   const size_t header_end = reply.find("\r\n\r\n");
   if (header_end != std::string::npos) out.body = reply.substr(header_end + 4);
   return out;

@@ -36,7 +36,10 @@ class WsClient {
  public:
   /// Connects and upgrades; `origin` empty: no Origin header.
   /// @throws std::runtime_error with the HTTP status of a refused upgrade ("status 403")
-  WsClient(int port, const std::string& target, const std::string& origin, const std::string& host = "");
+  WsClient(int port,
+           const std::string& target,
+           const std::string& origin,
+           const std::string& host = "");
   ~WsClient();
   WsClient(const WsClient&) = delete;
   WsClient& operator=(const WsClient&) = delete;
@@ -44,7 +47,8 @@ class WsClient {
   void send(const nlohmann::json& message);
   void send_text(const std::string& text);
   void send_binary(const std::string& bytes);
-  /// The next message. @throws std::runtime_error on timeout (the connection is then closed) or close
+  /// The next message. @throws std::runtime_error on timeout (the connection is then closed) or
+  /// close
   WsMessage read(std::chrono::milliseconds timeout = std::chrono::seconds(10));
   /// Reads until a text message of this type arrives (skipping others).
   nlohmann::json read_until(const std::string& type);
