@@ -19,9 +19,9 @@ using io::JsonField;
 using io::JsonFields;
 using nlohmann::json;
 
-constexpr double kMaxCoordinate = 1e4;      // m
-constexpr double kMaxSpeed = 1e3;           // m/s or rad/s
-constexpr double kMaxDuration = 3600;       // s
+constexpr double kMaxCoordinate = 1e4;  // m
+constexpr double kMaxSpeed = 1e3;       // m/s or rad/s
+constexpr double kMaxDuration = 3600;   // s
 constexpr std::size_t kMaxBodies = 1000;
 
 const io::NumberRange kCoordinate{-kMaxCoordinate, kMaxCoordinate};
@@ -229,7 +229,8 @@ json run_simulation(SimulationRun& run) {
   for (long long k = 1; k <= steps; ++k) {
     const auto t0 = std::chrono::steady_clock::now();
     w.step();
-    const double dt = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    const double dt =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
     if (us.size() < us.capacity()) us.push_back(dt);
     if (k % run.record_every == 0) frames.push_back(frame_json(w));
   }
