@@ -23,7 +23,10 @@ std::system_error io_error(int err, const std::string& what) {
 }  // namespace
 
 // a temporary file in the target's folder, fsync, rename over the target, fsync of the folder
-void write_file_atomically(const std::string& path, const void* bytes, std::size_t size) {
+void write_file_atomically(const std::string& path,
+                           const void* bytes,
+                           std::size_t size,
+                           unsigned mode) {
   namespace fs = std::filesystem;
   const fs::path target(path);
   if (target.filename().empty()) throw io_error(EISDIR, path + ": not a file name");
@@ -35,7 +38,7 @@ void write_file_atomically(const std::string& path, const void* bytes, std::size
     char suffix[32];
     std::snprintf(suffix, sizeof suffix, ".tmp-%08x%08x", rd(), rd());
     tmp = (dir / ("." + target.filename().string() + suffix)).string();
-    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
     if (fd < 0 && errno != EEXIST) {
       throw io_error(errno, path + ": cannot create the temporary file " + tmp);
     }

@@ -10,12 +10,18 @@ namespace io {
 
 /// Writes `size` bytes to a fresh temporary file beside `path` (same file system), fsyncs it,
 /// renames it over `path` and fsyncs the folder, so the rename itself survives a crash.
-/// On failure the temporary file is removed and `path` is untouched.
+/// The file is created with `mode` (less the umask). On failure the temporary file is removed
+/// and `path` is untouched.
 /// @throws std::system_error naming the path and the step that failed
-void write_file_atomically(const std::string& path, const void* bytes, std::size_t size);
+void write_file_atomically(const std::string& path,
+                           const void* bytes,
+                           std::size_t size,
+                           unsigned mode = 0666);
 
-inline void write_file_atomically(const std::string& path, const std::string& text) {
-  write_file_atomically(path, text.data(), text.size());
+inline void write_file_atomically(const std::string& path,
+                                  const std::string& text,
+                                  unsigned mode = 0666) {
+  write_file_atomically(path, text.data(), text.size(), mode);
 }
 
 }  // namespace io
