@@ -13,6 +13,10 @@ DocumentChange::DocumentChange(Document before, Document after, std::string labe
 void DocumentChange::apply(Session& s) { s.apply_document(after_); }
 void DocumentChange::revert(Session& s) { s.apply_document(before_); }
 
+std::unique_ptr<Command> DocumentChange::clone() const {
+  return std::make_unique<DocumentChange>(*this);
+}
+
 bool DocumentChange::merge_with(const Command& next) {
   const auto* n = dynamic_cast<const DocumentChange*>(&next);
   if (!n || gesture_ <= 0 || n->gesture_ != gesture_) return false;
@@ -46,6 +50,16 @@ bool History::redo(Session& s) {
   if (!can_redo()) return false;
   entries_[cursor_++]->apply(s);
   return true;
+}
+
+History::Checkpoint History::checkpoint() const {
+  return Checkpoint{entries_, cursor_ > 0 ? entries_[cursor_ - 1]->clone() : nullptr, cursor_};
+}
+
+void History::restore(Checkpoint checkpoint) {
+  entries_ = std::move(checkpoint.entries);
+  cursor_ = checkpoint.cursor;
+  if (cursor_ > 0) entries_[cursor_ - 1] = std::move(checkpoint.current);
 }
 
 std::vector<std::string> History::undo_labels() const {

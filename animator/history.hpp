@@ -1,6 +1,8 @@
 // Undo and redo as commands (STYLE.md §7): one entry per gesture, pin change, key edit or clip
 // edit. A command stores the document before and after, so redo restores exactly the state undo
-// left; entries of one gesture merge into one.
+// left; entries of one gesture merge into one. A checkpoint of the history is cheap (entries are
+// shared; only the one that merging and amending change in place is copied), so an edit
+// that could not be saved can be taken back exactly.
 #pragma once
 
 #include <memory>
@@ -21,6 +23,7 @@ class Command {
   /// Absorbs `next` (same gesture) into this command; false when they stay separate.
   virtual bool merge_with(const Command& next) = 0;
   virtual const std::string& label() const = 0;
+  virtual std::unique_ptr<Command> clone() const = 0;
 };
 
 /// A change of the session's document from `before` to `after`.
@@ -31,6 +34,7 @@ class DocumentChange final : public Command {
   void revert(Session& s) override;
   bool merge_with(const Command& next) override;
   const std::string& label() const override { return label_; }
+  std::unique_ptr<Command> clone() const override;
   int gesture() const { return gesture_; }
   /// The state this change ends in (after settling, see History::amend).
   void set_after(const Document& after) { after_ = after; }
@@ -63,8 +67,18 @@ class History {
     cursor_ = 0;
   }
 
+  /// The history as it is now, to go back to with restore().
+  struct Checkpoint {
+    std::vector<std::shared_ptr<Command>> entries;
+    // a copy of entries[cursor - 1], the one entry that record() and amend() change in place
+    std::shared_ptr<Command> current;
+    size_t cursor = 0;
+  };
+  Checkpoint checkpoint() const;
+  void restore(Checkpoint checkpoint);
+
  private:
-  std::vector<std::unique_ptr<Command>> entries_;
+  std::vector<std::shared_ptr<Command>> entries_;
   size_t cursor_ = 0;  // entries_[0, cursor_) are applied
 };
 

@@ -59,6 +59,28 @@ void Session::restore(Document doc, const Playback& playback) {
   history_.clear();
 }
 
+Session::Checkpoint Session::checkpoint() const {
+  return Checkpoint{history_.checkpoint(), gesture_counter_, last_gesture_, edit_counter_};
+}
+
+void Session::roll_back(const Document& doc, const Playback& playback, Checkpoint checkpoint) {
+  if (const std::string e = core::check_configuration(*model_, doc.q); !e.empty()) {
+    throw SessionError("q", e);
+  }
+  drag_.reset();
+  gesture_before_.reset();
+  motion_editor_.reset();
+  motion_edit_frame_ = -1;
+  recording_.reset();
+  apply_document(doc);
+  playback_ = playback;
+  playback_.playing = false;
+  history_.restore(std::move(checkpoint.history));
+  gesture_counter_ = checkpoint.gesture_counter;
+  last_gesture_ = checkpoint.last_gesture;
+  edit_counter_ = checkpoint.edit_counter;
+}
+
 // --- pose ------------------------------------------------------------------------------------
 
 void Session::set_pose(const Eigen::VectorXd& q) {

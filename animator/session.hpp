@@ -154,6 +154,18 @@ class Session {
   bool redo();
   const History& history() const { return history_; }
 
+  // --- taking an edit back (one that could not be saved) ---------------------------------------
+  /// The undo history and edit counters as they are now.
+  struct Checkpoint {
+    History::Checkpoint history;
+    int gesture_counter = 0, last_gesture = 0, edit_counter = 0;
+  };
+  Checkpoint checkpoint() const;
+  /// Returns to `doc` and `playback` (a state known to be saved) with the undo history of
+  /// `checkpoint`: a gesture, motion edit or recording in progress ends without being kept, and
+  /// playback pauses. @throws SessionError if doc.q is not a valid configuration
+  void roll_back(const Document& doc, const Playback& playback, Checkpoint checkpoint);
+
   // --- time ---------------------------------------------------------------------------------
   struct TickResult {
     bool pose_changed = false;

@@ -19,7 +19,10 @@ bool positive_finite(double x) { return std::isfinite(x) && x > 0; }
 
 std::string validate(const SolverSettings& s) {
   if (!positive_finite(s.dt)) return "dt must be a finite number > 0";
-  if (s.iterations < 1 || s.iterations > 1000) return "iterations must be in [1, 1000]";
+  if (s.iterations < kMinIterations || s.iterations > kMaxIterations) {
+    return "iterations must be in [" + std::to_string(kMinIterations) + ", " +
+           std::to_string(kMaxIterations) + "]";
+  }
   if (!std::isfinite(s.damping) || s.damping < 0) return "damping must be finite and >= 0";
   if (!std::isfinite(s.top_damping) || s.top_damping < 0)
     return "top_damping must be finite and >= 0";

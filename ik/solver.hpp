@@ -32,6 +32,8 @@ namespace ik {
 // with explicit integration the error shrinks by (1 − K h) per step, so K h ≤ 1 (digest §2.3).
 constexpr double kDefaultTimeStep = 1.0 / 60.0;
 constexpr int kDefaultIterations = 1;
+constexpr int kMinIterations = 1;  // the range of SolverSettings::iterations
+constexpr int kMaxIterations = 1000;
 constexpr double kDefaultDamping = 3e-2;           // SR inverse k of level 3 (see docs/ik.md)
 constexpr double kResidualDampingSpeed = 1.0;      // m/s or rad/s: residual at which k reaches its
                                                    // full value under DampingSchedule::kResidual
