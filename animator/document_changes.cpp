@@ -43,7 +43,8 @@ Splice read_splice(JsonFields& f, const JsonField& j, std::size_t size) {
   Splice s;
   const auto n = static_cast<std::int64_t>(size);
   s.at = static_cast<std::size_t>(f.integer(j["at"], 0, n));
-  s.remove = static_cast<std::size_t>(f.integer(j["remove"], 0, n - static_cast<std::int64_t>(s.at)));
+  s.remove =
+      static_cast<std::size_t>(f.integer(j["remove"], 0, n - static_cast<std::int64_t>(s.at)));
   s.insert = f.array(j["insert"]).size();
   return s;
 }

@@ -150,8 +150,9 @@ Keyframe read_key(JsonFields& f, const JsonField& key, const core::Model& m) {
 json layer_to_json(const EditLayer& l) {
   json disp = json::array();
   for (const auto& v : l.displacement) disp.push_back(configuration_to_json(v));
-  return {{"name", l.name},       {"first_frame", l.first_frame}, {"falloff", l.falloff},
-          {"weight", l.weight},   {"muted", l.muted},             {"displacement", disp}};
+  return {{"name", l.name},       {"first_frame", l.first_frame},
+          {"falloff", l.falloff}, {"weight", l.weight},
+          {"muted", l.muted},     {"displacement", disp}};
 }
 
 std::shared_ptr<const EditLayer> read_layer(JsonFields& f,

@@ -32,9 +32,7 @@ void read_settings(io::JsonFields& f, const io::JsonField& j, ik::SolverSettings
 
 nlohmann::json configuration_to_json(const Eigen::VectorXd& q);
 /// nq numbers that pass core::check_configuration.
-Eigen::VectorXd read_configuration(io::JsonFields& f,
-                                   const io::JsonField& q,
-                                   const core::Model& m);
+Eigen::VectorXd read_configuration(io::JsonFields& f, const io::JsonField& q, const core::Model& m);
 
 nlohmann::json pins_to_json(const core::Model& m, const std::vector<Pin>& pins);
 std::vector<Pin> read_pins(io::JsonFields& f, const io::JsonField& pins, const core::Model& m);

@@ -195,8 +195,8 @@ void JournalWriter::append(std::uint64_t seq, std::string_view payload) {
   std::size_t done = 0;
   while (done < record.size()) {
     errno = 0;
-    const ssize_t n = ::pwrite(fd_, record.data() + done, record.size() - done,
-                               static_cast<off_t>(end_ + done));
+    const ssize_t n =
+        ::pwrite(fd_, record.data() + done, record.size() - done, static_cast<off_t>(end_ + done));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) fail("write failed");
     done += static_cast<std::size_t>(n);

@@ -81,7 +81,7 @@ class JournalWriter {
 
   std::string path_;
   int fd_ = -1;
-  std::uint64_t end_ = 0;                                      // end of the last good record
+  std::uint64_t end_ = 0;                                       // end of the last good record
   std::vector<std::pair<std::uint64_t, std::uint64_t>> index_;  // (seq, offset) of each record
   bool tail_dirty_ = false;  // a failed append may have left bytes after end_
 };

@@ -1,11 +1,14 @@
 #include "server/http_routes.hpp"
 
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <system_error>
 
+#include "animator/session_file.hpp"
 #include "io/bundled_characters.hpp"
 #include "io/bvh.hpp"
 #include "io/gltf.hpp"
@@ -354,6 +357,15 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
         std::string what = "internal error";
         try {
           if (error) std::rethrow_exception(error);
+        } catch (const animator::SessionWriteError& e) {
+          // the server could not save: its fault, not the request's
+          return send_error(res, e.out_of_space() ? 507 : 503, e.what());
+        } catch (const std::system_error& e) {
+          const int err = e.code().value();
+          if (err == ENOSPC || err == EDQUOT || err == EFBIG) {
+            return send_error(res, 507, std::string("storage: ") + e.code().message());
+          }
+          what = e.what();
         } catch (const animator::SessionError& e) {
           return send_error(res, 400, e.what());
         } catch (const std::exception& e) {

@@ -9,14 +9,33 @@
 namespace server {
 
 using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+namespace {
+
+// what the client hears about a change that could not be saved (the path stays in the log)
+std::string not_saved(const animator::SessionWriteError& e) {
+  return "not saved (" + std::generic_category().message(e.error()) + "), so not applied";
+}
+
+}  // namespace
 
 SessionActor::SessionActor(std::string id,
                            std::unique_ptr<animator::Session> session,
-                           std::string save_path)
+                           std::unique_ptr<SessionJournal> journal)
     : id_(std::move(id)),
       session_(std::move(session)),
       model_(session_->model_ptr()),
-      save_path_(std::move(save_path)),
+      journal_(std::move(journal)),
+      thread_([this] { run(); }) {}
+
+SessionActor::SessionActor(std::string id,
+                           std::unique_ptr<animator::Session> session,
+                           const std::string& save_path)
+    : id_(std::move(id)),
+      session_(std::move(session)),
+      model_(session_->model_ptr()),
+      journal_(save_path.empty() ? nullptr : SessionJournal::start(save_path, *session_)),
       thread_([this] { run(); }) {}
 
 SessionActor::~SessionActor() { stop(); }
@@ -32,7 +51,9 @@ void SessionActor::stop() {
 
 ActorStats SessionActor::stats() const {
   std::lock_guard lock(mutex_);
-  return stats_;
+  ActorStats out = stats_;
+  if (journal_) out.snapshots = journal_->snapshots();
+  return out;
 }
 
 void SessionActor::subscribe(std::uint64_t connection,
@@ -78,7 +99,8 @@ void SessionActor::post(std::uint64_t connection, ClientRequest request) {
   enqueue(std::move(item));
 }
 
-bool SessionActor::enqueue_call(std::function<void(animator::Session&)> f, bool edit) {
+bool SessionActor::enqueue_call(
+    std::function<void(animator::Session&, const std::function<void()>& save)> f, bool edit) {
   Item item;
   item.kind = Item::Kind::kCall;
   item.call = std::move(f);
@@ -145,11 +167,12 @@ void SessionActor::run() {
       if (session_->needs_tick()) tick();
     }
     if (pose_dirty_) broadcast_pose();
-    if (was_moving_ && !session_->needs_tick()) save();  // the figure settled: keep where it ended
+    if (was_moving_ && !session_->needs_tick()) settle();  // keep where the figure came to rest
     was_moving_ = session_->needs_tick();
+    if (journal_) journal_->snapshot_if_due(/*settled=*/false);
   }
   // whatever was posted before stop() has run; keep the final state
-  if (was_moving_) save();
+  if (was_moving_) settle();
 }
 
 bool SessionActor::apply_drag(DragSample& sample) {
@@ -194,10 +217,16 @@ void SessionActor::process(Item& item) {
       subscribers_.erase(item.connection);
       last_seq_.erase(item.connection);
       break;
-    case Item::Kind::kCall:
-      item.call(*session_);
-      if (item.edit) after_edit();
+    case Item::Kind::kCall: {
+      const bool edit = item.edit;
+      std::optional<animator::Session::Checkpoint> checkpoint;
+      if (edit && journal_) checkpoint = session_->checkpoint();
+      item.call(*session_, [&] {
+        if (checkpoint) save_edit(json{{"type", "call"}}, std::move(*checkpoint));
+      });
+      if (edit) after_edit();
       break;
+    }
     case Item::Kind::kMessage:
       apply_request(item.connection, item.request);
       break;
@@ -208,11 +237,24 @@ void SessionActor::process(Item& item) {
 }
 
 void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& request) {
+  std::optional<animator::Session::Checkpoint> checkpoint;
+  if (journal_) checkpoint = session_->checkpoint();
   try {
     apply(*session_, request.message);
   } catch (const std::exception& e) {
     send_to(connection, error_message(request.id, e.what()));
     return;
+  }
+  // durable before acknowledged
+  if (checkpoint) {
+    try {
+      save_edit(to_json(request.message), std::move(*checkpoint));
+    } catch (const animator::SessionWriteError& e) {
+      send_to(connection, error_message(request.id, std::string(message_type(request.message)) +
+                                                        ": " + e.what()));
+      after_edit();  // every page draws the state again, without the edit
+      return;
+    }
   }
   if (!request.id.is_null())
     send_to(connection, ack_message(request.id, message_type(request.message)));
@@ -222,10 +264,51 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
 
 void SessionActor::after_edit() {
   pose_dirty_ = true;
-  nlohmann::json state = state_json(*session_, id_);
+  json state = state_json(*session_, id_);
   state["type"] = "state";
-  broadcast_text(state.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-  save();
+  broadcast_text(state.dump(-1, ' ', false, json::error_handler_t::replace));
+}
+
+// Records what changed since the last record; when that fails, returns the session to what the
+// disk holds with the undo history of `checkpoint` and throws SessionWriteError for the client.
+void SessionActor::save_edit(const json& op, animator::Session::Checkpoint checkpoint) {
+  try {
+    if (!journal_->record(*session_, op)) return;
+    std::lock_guard lock(mutex_);
+    ++stats_.saves;
+  } catch (const animator::SessionWriteError& e) {
+    std::cerr << "pindrag serve: session " << id_ << ": " << op.value("type", "edit")
+              << " not saved, taken back: " << e.what() << "\n";
+    session_->roll_back(journal_->document(), journal_->playback(), std::move(checkpoint));
+    {
+      std::lock_guard lock(mutex_);
+      ++stats_.save_failures;
+    }
+    throw animator::SessionWriteError(e.error(), not_saved(e));
+  }
+}
+
+// The figure came to rest: its pose (and the playback time) are recorded, which nobody waits
+// for; a failure is announced to every connection and the next edit's record carries it.
+void SessionActor::settle() {
+  if (!journal_) return;
+  try {
+    if (journal_->record(*session_, json{{"type", "settle"}})) {
+      std::lock_guard lock(mutex_);
+      ++stats_.saves;
+    }
+  } catch (const animator::SessionWriteError& e) {
+    std::cerr << "pindrag serve: session " << id_ << ": the settled pose not saved: " << e.what()
+              << "\n";
+    broadcast_text(error_message(nullptr,
+                                 "session: the pose the figure came to rest in is not "
+                                 "saved (" +
+                                     std::generic_category().message(e.error()) + ")"));
+    std::lock_guard lock(mutex_);
+    ++stats_.save_failures;
+    return;
+  }
+  journal_->snapshot_if_due(/*settled=*/true);
 }
 
 void SessionActor::tick() {
@@ -264,17 +347,6 @@ void SessionActor::broadcast_text(const std::string& text) {
 void SessionActor::send_to(std::uint64_t connection, std::string text) {
   const auto it = subscribers_.find(connection);
   if (it != subscribers_.end()) it->second->send_text(std::move(text));
-}
-
-void SessionActor::save() {
-  if (save_path_.empty()) return;
-  try {
-    animator::save_session(*session_, save_path_);
-    std::lock_guard lock(mutex_);
-    ++stats_.saves;
-  } catch (const std::exception& e) {
-    std::cerr << "pindrag serve: could not save session " << id_ << ": " << e.what() << "\n";
-  }
 }
 
 }  // namespace server

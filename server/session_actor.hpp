@@ -6,7 +6,14 @@
 // A sample is flushed into the ordered queue when a command arrives after it, so a drag_end never
 // overtakes the drag_moves before it. The solver ticks only while Session::needs_tick() says
 // something moves, at most every kMinTickInterval, and immediately after a new drag sample.
-// The session is saved (atomically) after every committed edit and when the figure settles.
+//
+// Durability (server/session_journal.hpp): an edit is acknowledged only once its journal record
+// is on disk. When the record cannot be written (disk full, a file size limit), the edit is taken
+// back (the session returns to what the disk holds, with the undo history it had), the client
+// gets an `error` on the edit's id instead of an `ack`, and every connection gets the `state`
+// again. A drag_move is acknowledged as applied to the gesture in progress; the gesture is
+// saved with its drag_end. The settled pose after an edit is recorded when the figure comes to
+// rest; snapshots are written off the actor thread.
 #pragma once
 
 #include <chrono>
@@ -26,6 +33,7 @@
 #include "animator/session.hpp"
 #include "server/messages.hpp"
 #include "server/protocol.hpp"
+#include "server/session_journal.hpp"
 
 namespace server {
 
@@ -44,7 +52,9 @@ struct ActorStats {
   std::uint64_t ticks = 0;
   std::uint64_t drag_samples_received = 0;
   std::uint64_t drag_samples_applied = 0;
-  std::uint64_t saves = 0;
+  std::uint64_t saves = 0;  // journal records written
+  std::uint64_t save_failures = 0;
+  std::uint64_t snapshots = 0;
   std::uint64_t pose_frames = 0;
 };
 
@@ -55,8 +65,15 @@ class SessionActor {
   /// Wall time between ticks while playing or settling with no new drag sample.
   static constexpr std::chrono::microseconds kTickPeriod{16667};
 
-  /// `save_path` empty: the session is not saved.
-  SessionActor(std::string id, std::unique_ptr<animator::Session> session, std::string save_path);
+  /// `journal` null: the session is not saved.
+  SessionActor(std::string id,
+               std::unique_ptr<animator::Session> session,
+               std::unique_ptr<SessionJournal> journal);
+  /// A new session saved at `save_path` (SessionJournal::start); empty: not saved.
+  /// @throws animator::SessionWriteError
+  SessionActor(std::string id,
+               std::unique_ptr<animator::Session> session,
+               const std::string& save_path);
   ~SessionActor();
   SessionActor(const SessionActor&) = delete;
   SessionActor& operator=(const SessionActor&) = delete;
@@ -74,20 +91,26 @@ class SessionActor {
   void post(std::uint64_t connection, ClientRequest request);
 
   /// Runs `f` on the actor thread and returns its result (exceptions are rethrown here).
-  /// `edit`: the call may change the document; then the session is saved and `state` sent.
+  /// `edit`: the call may change the document; then the change is saved before the result is
+  /// returned, and `state` is sent. @throws animator::SessionWriteError when it cannot be saved
+  /// (the change is taken back then)
   template <class F>
   auto call(F f, bool edit = false) -> decltype(f(std::declval<animator::Session&>())) {
     using R = decltype(f(std::declval<animator::Session&>()));
     auto promise = std::make_shared<std::promise<R>>();
     auto future = promise->get_future();
     const bool accepted = enqueue_call(
-        [promise, f = std::move(f)](animator::Session& s) mutable {
+        [promise, f = std::move(f)](animator::Session& s,
+                                    const std::function<void()>& save) mutable {
           try {
             if constexpr (std::is_void_v<R>) {
               f(s);
+              save();
               promise->set_value();
             } else {
-              promise->set_value(f(s));
+              R result = f(s);
+              save();
+              promise->set_value(std::move(result));
             }
           } catch (...) {
             promise->set_exception(std::current_exception());
@@ -114,11 +137,13 @@ class SessionActor {
     ClientRequest request;
     DragSample drag;
     std::shared_ptr<SessionSubscriber> subscriber;
-    std::function<void(animator::Session&)> call;
+    // runs on the session; calls `save` after changing it (a no-op unless `edit`)
+    std::function<void(animator::Session&, const std::function<void()>& save)> call;
     bool edit = false;
   };
 
-  bool enqueue_call(std::function<void(animator::Session&)> f, bool edit);
+  bool enqueue_call(std::function<void(animator::Session&, const std::function<void()>& save)> f,
+                    bool edit);
   bool enqueue(Item item);
   void run();
   void process(Item& item);
@@ -129,12 +154,13 @@ class SessionActor {
   void broadcast_text(const std::string& text);
   void send_to(std::uint64_t connection, std::string text);
   void after_edit();
-  void save();
+  void save_edit(const nlohmann::json& op, animator::Session::Checkpoint checkpoint);
+  void settle();
 
   const std::string id_;
   std::unique_ptr<animator::Session> session_;
   std::shared_ptr<const core::Model> model_;
-  const std::string save_path_;
+  std::unique_ptr<SessionJournal> journal_;  // null: not saved
 
   // shared with posting threads
   mutable std::mutex mutex_;

@@ -22,10 +22,16 @@ void write_token(const std::string& path, const std::string& token) {
   const std::string temp = path + ".tmp";
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0600);
   if (fd < 0) throw std::system_error(errno, std::generic_category(), temp);
+  errno = 0;
   const bool ok = ::write(fd, token.data(), token.size()) == static_cast<ssize_t>(token.size()) &&
                   ::fsync(fd) == 0;
+  const int err = errno ? errno : EIO;
   ::close(fd);
-  if (!ok || ::rename(temp.c_str(), path.c_str()) != 0) {
+  if (!ok) {
+    ::unlink(temp.c_str());
+    throw std::system_error(err, std::generic_category(), path);
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
     throw std::system_error(errno, std::generic_category(), path);
   }
 }
@@ -56,8 +62,9 @@ int SessionRegistry::restore(std::ostream& log) {
       if (!(token_file >> token) || !is_valid_id(token)) {
         throw std::runtime_error("missing or malformed token file");
       }
-      auto session = animator::load_session(path.string());
-      auto actor = std::make_shared<SessionActor>(id, std::move(session), path.string());
+      SessionJournal::Loaded loaded = SessionJournal::load(path.string(), log);
+      auto actor =
+          std::make_shared<SessionActor>(id, std::move(loaded.session), std::move(loaded.journal));
       std::lock_guard lock(mutex_);
       if (sessions_.size() >= kMaxSessions)
         throw TooManySessions("more saved sessions than the server holds");
@@ -80,11 +87,20 @@ SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session
   }
   SessionHandle handle{random_hex(16), random_hex(16), nullptr};
   const std::string path = session_path(handle.id);
-  if (!path.empty()) {
-    write_token((fs::path(path).replace_extension(".token")).string(), handle.token);
-    animator::save_session(*session, path);
+  const std::string token_path = fs::path(path).replace_extension(".token").string();
+  try {
+    if (!path.empty()) write_token(token_path, handle.token);
+  } catch (const std::system_error& e) {
+    throw animator::SessionWriteError(e.code().value(), e.what());
   }
-  handle.actor = std::make_shared<SessionActor>(handle.id, std::move(session), path);
+  try {
+    // the snapshot and an empty journal are written before the session is announced
+    handle.actor = std::make_shared<SessionActor>(handle.id, std::move(session), path);
+  } catch (const animator::SessionWriteError&) {
+    std::error_code ec;
+    fs::remove(token_path, ec);
+    throw;
+  }
   std::lock_guard lock(mutex_);
   sessions_[handle.id] = handle;
   return handle;

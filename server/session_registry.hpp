@@ -1,5 +1,6 @@
 // The sessions of a server, by id: created from a character, found by id and token, saved under
-// <data-dir>/sessions/<id>.json (with the token beside it, mode 0600) and restored at startup.
+// <data-dir>/sessions/ as <id>.json and <id>.journal (server/session_journal.hpp) with the token
+// in <id>.token, all mode 0600, and restored at startup (the snapshot with its journal replayed).
 // Thread contract: every function may be called from any thread (one mutex over the map).
 #pragma once
 
@@ -46,7 +47,8 @@ class SessionRegistry {
   /// Loads every saved session of the data directory; reports each one it cannot load to `log`
   /// and goes on. Returns how many were restored.
   int restore(std::ostream& log);
-  /// @throws TooManySessions, std::system_error when the data directory cannot be written
+  /// @throws TooManySessions, animator::SessionWriteError when the data directory cannot be
+  ///         written
   SessionHandle create(std::unique_ptr<animator::Session> session);
   /// The session `id` if `token` is its token (compared in constant time).
   SessionLookup find(std::string_view id, std::string_view token) const;

@@ -182,8 +182,7 @@ TEST(JournalFile, AFailedAppendLeavesNothingAndTheNextOneWorks) {
       ADD_FAILURE() << "the append past the file size limit succeeded";
     } catch (const std::system_error& e) {
       EXPECT_EQ(e.code().value(), EFBIG);
-      EXPECT_NE(std::string(e.what()).find(path + ": write failed"), std::string::npos)
-          << e.what();
+      EXPECT_NE(std::string(e.what()).find(path + ": write failed"), std::string::npos) << e.what();
     }
   }
   EXPECT_EQ(fs::file_size(path), size);  // cut back: no half record
