@@ -1,11 +1,13 @@
-// parse_client_message (protocol.hpp): a text frame to a ClientRequest. Every refusal names
-// "<type>.<field>" and the rule. Only the syntax and the ranges of docs/protocol.md are checked
-// here; link names and indices are checked against the session when the message is applied.
-#include <cmath>
+// parse_client_message (protocol.hpp): a text frame to a ClientRequest through io::JsonFields.
+// Every refusal names "<type>.<field>" and the rule. Only the syntax and the ranges of
+// docs/protocol.md are checked here; link names and indices are checked against the session when
+// the message is applied.
 #include <cstdint>
 #include <limits>
 #include <utility>
 
+#include "io/json_parse.hpp"
+#include "io/json_reader.hpp"
 #include "server/messages.hpp"
 #include "server/protocol.hpp"
 
@@ -17,213 +19,151 @@ using nlohmann::json;
 // Largest coordinate accepted from a client (m); anything beyond is a typo or an attack.
 constexpr double kMaxCoordinate = 1e4;
 constexpr double kMaxTime = 1e6;
-constexpr int kMaxIndex = std::numeric_limits<int>::max();
+constexpr std::int64_t kMaxIndex = std::numeric_limits<int>::max();
+constexpr std::int64_t kMaxU32 = std::numeric_limits<std::uint32_t>::max();
 
-// Reads fields of one message; every error names "<type>.<field>" and the rule.
+// The fields of one message through the project's JSON reader (io/json_reader.hpp): every
+// refusal is "<type>.<field>: <rule>" (JSON pointer in dotted form: "pin.point.0"), numbers are
+// range-checked, never wrapped. A field sent as null counts as left out.
 class Fields {
  public:
-  Fields(const json& message, std::string type) : m_(message), type_(std::move(type)) {}
+  Fields(const json& message, const std::string& type)
+      : root_(message),
+        f_(io::JsonStyle{.base = type, .dotted = true, .wording = io::JsonWording::kRequest}) {}
 
-  [[noreturn]] void fail(const std::string& field, const std::string& rule) const {
-    throw ProtocolError(type_ + "." + field + ": " + rule, id());
+  io::JsonField operator[](const char* field) const { return root_[field]; }
+  bool has(const char* field) const { return root_[field].given(); }
+  [[noreturn]] void fail(const char* field, const std::string& rule) {
+    f_.fail(root_[field], rule);
   }
-  json id() const {
-    const auto it = m_.find("id");
-    if (it == m_.end() || !(it->is_number() || it->is_string())) return nullptr;
-    return *it;
+
+  double number(const char* field, double lo, double hi) {
+    return f_.number(root_[field], {.lo = lo, .hi = hi});
   }
-  bool has(const char* field) const { return m_.contains(field) && !m_[field].is_null(); }
-  const json& get(const char* field) const {
-    if (!has(field)) fail(field, "is required");
-    return m_[field];
-  }
-  double number(const char* field, double lo, double hi) const {
-    const json& v = get(field);
-    if (!v.is_number()) fail(field, "must be a number");
-    const double d = v.get<double>();
-    if (!std::isfinite(d) || d < lo || d > hi) {
-      fail(field, "must be a finite number in [" + fmt(lo) + ", " + fmt(hi) + "]");
-    }
-    return d;
-  }
-  std::optional<double> optional_number(const char* field, double lo, double hi) const {
+  std::optional<double> optional_number(const char* field, double lo, double hi) {
     if (!has(field)) return std::nullopt;
     return number(field, lo, hi);
   }
-  int integer(const char* field, int lo, int hi) const {
-    const json& v = get(field);
-    if (!v.is_number_integer()) fail(field, "must be an integer");
-    const auto i = v.get<std::int64_t>();
-    if (i < lo || i > hi) {
-      fail(field, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    }
-    return static_cast<int>(i);
+  std::int64_t integer(const char* field, std::int64_t lo, std::int64_t hi) {
+    return f_.integer(root_[field], lo, hi);
   }
-  std::uint32_t u32(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_number_unsigned() || v.get<std::uint64_t>() > 0xFFFFFFFFull) {
-      fail(field, "must be an unsigned 32-bit integer");
-    }
-    return static_cast<std::uint32_t>(v.get<std::uint64_t>());
-  }
-  bool boolean(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_boolean()) fail(field, "must be true or false");
-    return v.get<bool>();
-  }
-  const std::string& string(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_string()) fail(field, "must be a string");
-    return v.get_ref<const std::string&>();
-  }
-  Position position(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_array() || v.size() != 3) fail(field, "must be an array of 3 numbers [x, y, z]");
-    Position out;
-    for (int k = 0; k < 3; ++k) {
-      if (!v[k].is_number()) fail(field, "must be an array of 3 numbers [x, y, z]");
-      out[k] = v[k].get<double>();
-      if (!std::isfinite(out[k]) || std::abs(out[k]) > kMaxCoordinate) {
-        fail(field, "components must be finite and within ±" + fmt(kMaxCoordinate) + " m");
-      }
-    }
-    return out;
-  }
-  std::optional<Position> optional_position(const char* field) const {
+  bool boolean(const char* field) { return f_.boolean(root_[field]); }
+  std::string string(const char* field) { return f_.string(root_[field]); }
+  // [x, y, z], each within ±kMaxCoordinate
+  std::optional<Position> optional_position(const char* field) {
     if (!has(field)) return std::nullopt;
     return position(field);
   }
-  // as sent; normalized when applied
-  std::optional<Rotation> optional_rotation(const char* field) const {
+  Position position(const char* field) {
+    const Eigen::VectorXd v = f_.numbers(root_[field], 3, {-kMaxCoordinate, kMaxCoordinate});
+    return {v[0], v[1], v[2]};
+  }
+  // [w, x, y, z] as sent (normalized when applied), of nonzero length
+  std::optional<Rotation> optional_rotation(const char* field) {
     if (!has(field)) return std::nullopt;
-    const json& v = get(field);
-    if (!v.is_array() || v.size() != 4) fail(field, "must be a quaternion [w, x, y, z]");
-    Rotation q;
-    double norm2 = 0;
-    for (int k = 0; k < 4; ++k) {
-      if (!v[k].is_number()) fail(field, "must be a quaternion [w, x, y, z]");
-      q[k] = v[k].get<double>();
-      if (!std::isfinite(q[k])) fail(field, "components must be finite");
-      norm2 += q[k] * q[k];
+    const Eigen::VectorXd v = f_.numbers(root_[field], 4);
+    if (v.norm() < io::kMinQuaternionNorm) {
+      fail(field, "quaternion norm is " + io::message_number(v.norm()) +
+                      " (rule: a quaternion [w, x, y, z] of nonzero length)");
     }
-    if (std::sqrt(norm2) < 1e-6) fail(field, "must not be the zero quaternion");
-    return q;
+    return Rotation{v[0], v[1], v[2], v[3]};
   }
-  const json& object(const char* field) const {
-    const json& v = get(field);
-    if (!v.is_object()) fail(field, "must be an object");
-    return v;
-  }
+  const json& object(const char* field) { return *f_.object(root_[field]); }
+  io::JsonFields& reader() { return f_; }
 
  private:
-  static std::string fmt(double d) {
-    std::string s = std::to_string(d);
-    s.erase(s.find_last_not_of('0') + 1);
-    if (!s.empty() && s.back() == '.') s.pop_back();
-    return s;
-  }
-  const json& m_;
-  std::string type_;
+  const io::JsonField root_;
+  io::JsonFields f_;
 };
 
-ik::TaskMode task_mode(const Fields& f) {
+ik::TaskMode task_mode(Fields& f) {
   if (!f.has("mode")) return ik::TaskMode::kPosition;
-  const std::string& mode = f.string("mode");
-  if (mode == "position") return ik::TaskMode::kPosition;
-  if (mode == "orientation") return ik::TaskMode::kOrientation;
-  if (mode == "pose") return ik::TaskMode::kPose;
-  f.fail("mode", "must be \"position\", \"orientation\" or \"pose\"");
+  const auto mode = ik::task_mode_from_string(f.string("mode"));
+  if (!mode) f.fail("mode", "expected \"position\", \"orientation\" or \"pose\"");
+  return *mode;
 }
 
-animator::Scene scene_from(const Fields& f, const json& j) {
-  animator::Scene scene;
-  const std::pair<const char*, bool animator::Scene::*> flags[] = {
-      {"gravity", &animator::Scene::gravity},
-      {"ground_contact", &animator::Scene::ground_contact},
-      {"dynamic_pins", &animator::Scene::dynamic_pins},
-      {"hard_limits", &animator::Scene::hard_limits},
-      {"self_collision", &animator::Scene::self_collision}};
-  for (const auto& [name, member] : flags) {
-    if (!j.contains(name)) continue;
-    if (!j[name].is_boolean()) f.fail(std::string("scene.") + name, "must be true or false");
-    scene.*member = j[name].get<bool>();
-  }
-  for (const auto& [key, value] : j.items()) {
-    bool known = false;
-    for (const auto& flag : flags) known = known || key == flag.first;
-    if (!known) f.fail("scene." + key.substr(0, 64), "is not a scene effect");
-  }
-  return scene;
+animator::Scene scene_from(Fields& f) {
+  io::JsonFields& r = f.reader();
+  const io::JsonField j = r.object(f["scene"]);
+  r.refuse_unknown_keys(
+      j, {"gravity", "ground_contact", "dynamic_pins", "hard_limits", "self_collision"});
+  return animator::Scene{
+      r.boolean_or(j["gravity"], false), r.boolean_or(j["ground_contact"], false),
+      r.boolean_or(j["dynamic_pins"], false), r.boolean_or(j["hard_limits"], false),
+      r.boolean_or(j["self_collision"], false)};
 }
 
 // --- one reader per message with fields; fields not in docs/protocol.md are ignored ----------
 
-void read(const Fields& f, Hello& m) { m.protocol = f.integer("protocol", 0, kMaxIndex); }
+void read(Fields& f, Hello& m) {
+  m.protocol = static_cast<int>(f.integer("protocol", 0, kMaxIndex));
+}
 
-void read(const Fields& f, DragBegin& m) {
+void read(Fields& f, DragBegin& m) {
   m.link = f.string("link");
   m.target = f.position("target");
   m.point = f.optional_position("point").value_or(Position{});
 }
 
-void read(const Fields& f, DragMove& m) {
-  m.seq = f.u32("seq");
+void read(Fields& f, DragMove& m) {
+  m.seq = static_cast<std::uint32_t>(f.integer("seq", 0, kMaxU32));
   m.target = f.position("target");
   m.rotation = f.optional_rotation("rotation");
 }
 
-void read(const Fields& f, Pin& m) {
+void read(Fields& f, Pin& m) {
   m.link = f.string("link");
   m.mode = task_mode(f);
   m.point = f.optional_position("point").value_or(Position{});
 }
 
-void read(const Fields& f, Unpin& m) { m.link = f.string("link"); }
+void read(Fields& f, Unpin& m) { m.link = f.string("link"); }
 
-void read(const Fields& f, MovePin& m) {
+void read(Fields& f, MovePin& m) {
   m.link = f.string("link");
   m.target = f.position("target");
   m.rotation = f.optional_rotation("rotation");
 }
 
-void read(const Fields& f, SetSettings& m) { m.settings = f.object("settings"); }
-void read(const Fields& f, SetEffects& m) { m.scene = scene_from(f, f.object("scene")); }
+void read(Fields& f, SetSettings& m) { m.settings = f.object("settings"); }
+void read(Fields& f, SetEffects& m) { m.scene = scene_from(f); }
 
-void read(const Fields& f, KeyInsert& m) {
+void read(Fields& f, KeyInsert& m) {
   m.time = f.optional_number("time", 0, kMaxTime);
   if (f.has("interpolation")) {
     const auto parsed = animator::interpolation_from_string(f.string("interpolation"));
-    if (!parsed) f.fail("interpolation", "must be \"step\", \"linear\" or \"smooth\"");
+    if (!parsed) f.fail("interpolation", "expected \"step\", \"linear\" or \"smooth\"");
     m.interpolation = *parsed;
   }
 }
 
-void read(const Fields& f, KeyDelete& m) { m.index = f.integer("index", 0, kMaxIndex); }
+void read(Fields& f, KeyDelete& m) { m.index = static_cast<int>(f.integer("index", 0, kMaxIndex)); }
 
-void read(const Fields& f, KeyMove& m) {
-  m.index = f.integer("index", 0, kMaxIndex);
+void read(Fields& f, KeyMove& m) {
+  m.index = static_cast<int>(f.integer("index", 0, kMaxIndex));
   m.time = f.number("time", 0, kMaxTime);
 }
 
-void read(const Fields& f, BakeKeys& m) {
+void read(Fields& f, BakeKeys& m) {
   m.rate = f.optional_number("rate", 1, 1000).value_or(animator::kDefaultClipRate);
 }
 
-void read(const Fields& f, Record& m) { m.on = f.boolean("on"); }
-void read(const Fields& f, Seek& m) { m.time = f.number("time", -kMaxTime, kMaxTime); }
+void read(Fields& f, Record& m) { m.on = f.boolean("on"); }
+void read(Fields& f, Seek& m) { m.time = f.number("time", -kMaxTime, kMaxTime); }
 
-void read(const Fields& f, SetLoop& m) {
+void read(Fields& f, SetLoop& m) {
   m.loop = f.boolean("loop");
   m.start = f.optional_number("start", 0, kMaxTime).value_or(0);
   m.end = f.optional_number("end", -kMaxTime, kMaxTime).value_or(-1);
 }
 
-void read(const Fields& f, SetSpeed& m) { m.speed = f.number("speed", -100, 100); }
+void read(Fields& f, SetSpeed& m) { m.speed = f.number("speed", -100, 100); }
 
-void read(const Fields& f, Layer& m) {
-  m.index = f.integer("index", 0, kMaxIndex);
+void read(Fields& f, Layer& m) {
+  m.index = static_cast<int>(f.integer("index", 0, kMaxIndex));
   if (f.has("remove")) {
-    if (!f.boolean("remove")) f.fail("remove", "must be true when present");
+    if (!f.boolean("remove")) f.fail("remove", "expected true when present");
     m.remove = true;
   } else if (f.has("muted")) {
     m.muted = f.boolean("muted");
@@ -234,16 +174,16 @@ void read(const Fields& f, Layer& m) {
   }
 }
 
-void read(const Fields& f, SetFalloff& m) { m.seconds = f.number("seconds", 0, 3600); }
+void read(Fields& f, SetFalloff& m) { m.seconds = f.number("seconds", 0, 3600); }
 
 // messages without fields: nothing to read
 template <class M>
-requires(M::kFields.empty()) void read(const Fields&, M&) {}
+requires(M::kFields.empty()) void read(Fields&, M&) {}
 
 // the ClientMessage alternative whose kType is `type`, read from `f`; nullopt when none is
 template <std::size_t... I>
 std::optional<ClientMessage> read_message(std::string_view type,
-                                          const Fields& f,
+                                          Fields& f,
                                           std::index_sequence<I...>) {
   std::optional<ClientMessage> out;
   auto try_type = [&](auto type_tag) {
@@ -263,22 +203,28 @@ ClientRequest parse_client_message(std::string_view text) {
   json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) throw ProtocolError("message: not valid JSON");
   if (!j.is_object()) throw ProtocolError("message: must be a JSON object with a \"type\"");
+  // the id the answer carries back: a number or a string, else none
+  const auto id_it = j.find("id");
+  const json id = id_it != j.end() && (id_it->is_number() || id_it->is_string()) ? *id_it : json();
   const auto type_it = j.find("type");
-  const Fields envelope(j, "message");
   if (type_it == j.end() || !type_it->is_string()) {
-    throw ProtocolError("message.type: is required and must be a string", envelope.id());
+    throw ProtocolError("message.type: is required and must be a string", id);
   }
-  if (j.contains("id") && !(j["id"].is_number() || j["id"].is_string() || j["id"].is_null())) {
+  if (id_it != j.end() && id.is_null() && !id_it->is_null()) {
     throw ProtocolError("message.id: must be a number or a string");
   }
   const std::string& type = type_it->get_ref<const std::string&>();
-  const Fields fields(j, type);
-  std::optional<ClientMessage> message =
-      read_message(type, fields, std::make_index_sequence<std::variant_size_v<ClientMessage>>{});
-  if (!message) {
-    throw ProtocolError("type: unknown message type \"" + type.substr(0, 64) + "\"", envelope.id());
+  Fields fields(j, type);
+  try {
+    std::optional<ClientMessage> message =
+        read_message(type, fields, std::make_index_sequence<std::variant_size_v<ClientMessage>>{});
+    if (!message) {
+      throw ProtocolError("type: unknown message type \"" + type.substr(0, 64) + "\"", id);
+    }
+    return ClientRequest{std::move(*message), id};
+  } catch (const io::JsonFieldError& e) {
+    throw ProtocolError(e.what(), id);
   }
-  return ClientRequest{std::move(*message), envelope.id()};
 }
 
 }  // namespace server

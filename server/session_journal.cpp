@@ -83,10 +83,10 @@ SessionJournal::Loaded SessionJournal::load(const std::string& session_path, std
   for (std::size_t k = 0; k < contents.records.size(); ++k) {
     const io::JournalRecord& r = contents.records[k];
     if (r.seq <= snapshot_seq) continue;  // the snapshot holds it already
-    std::string problem =
-        r.seq != seq + 1 ? "sequence number " + std::to_string(r.seq) + " follows " +
-                               std::to_string(seq) + " (rule: one more than the last)"
-                         : replay(r, path, out.session->model(), doc, playback);
+    std::string problem = r.seq != seq + 1
+                              ? "sequence number " + std::to_string(r.seq) + " follows " +
+                                    std::to_string(seq) + " (rule: one more than the last)"
+                              : replay(r, path, out.session->model(), doc, playback);
     if (!problem.empty()) {
       contents.problem = "record at byte " + std::to_string(r.offset) + ": " + problem;
       contents.torn_tail = false;

@@ -175,4 +175,35 @@ TEST(ApplyMessage, SessionErrorsComeBackNamedByTypeAndField) {
             "drag_move.rotation: must be a unit quaternion [w, x, y, z]");
 }
 
+TEST(ApplyMessage, IntegersAreRangeCheckedNeverWrapped) {
+  // 2^32 + 1 is 1 as a 32-bit integer: each integer field is refused naming its field and range
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"type": "set_settings", "settings": {"iterations": 4294967297}})",
+       "set_settings.settings/iterations: 4294967297 is out of range (rule: an integer in [1, "
+       "1000])"},
+      {R"({"type": "set_settings", "settings": {"iterations": 0}})",
+       "set_settings.settings/iterations: 0 is out of range (rule: an integer in [1, 1000])"},
+      {R"({"type": "key_delete", "index": 4294967297})",
+       "key_delete.index: 4294967297 is out of range (rule: an integer in [0, 2147483647])"},
+      {R"({"type": "key_move", "index": -4294967295, "time": 1})",
+       "key_move.index: -4294967295 is out of range (rule: an integer in [0, 2147483647])"},
+      {R"({"type": "drag_move", "seq": 4294967297, "target": [0, 0, 0]})",
+       "drag_move.seq: 4294967297 is out of range (rule: an integer in [0, 4294967295])"},
+      {R"({"type": "hello", "protocol": 4294967297})",
+       "hello.protocol: 4294967297 is out of range (rule: an integer in [0, 2147483647])"},
+  };
+  Session session(human(), "human48");
+  const json before = animator::session_to_json(session);
+  for (const auto& [text, expected] : cases) {
+    std::string message;
+    try {
+      s::apply(session, s::parse_client_message(text).message);
+    } catch (const s::ProtocolError& e) {
+      message = e.what();
+    }
+    EXPECT_EQ(message, expected) << text;
+  }
+  EXPECT_EQ(animator::session_to_json(session), before);
+}
+
 }  // namespace

@@ -157,8 +157,8 @@ json snapshot(const ServerProcess& srv, const Session& s) {
 }
 
 std::unique_ptr<WsClient> connect(const ServerProcess& srv, const Session& s) {
-  auto ws = std::make_unique<WsClient>(
-      srv.ws_port, "/ws?session=" + s.id + "&token=" + s.token, srv.origin());
+  auto ws = std::make_unique<WsClient>(srv.ws_port, "/ws?session=" + s.id + "&token=" + s.token,
+                                       srv.origin());
   ws->send({{"type", "hello"}, {"protocol", 1}});
   return ws;
 }

@@ -133,10 +133,10 @@ class RandomEditor {
   json motion_edit() {
     const std::size_t layers = s_.layers().size();
     s_.play();
-    server::apply(s_, server::parse_client_message(
-                          json{{"type", "drag_begin"}, {"link", "r_hand"}, {"target", target()}}
-                              .dump())
-                          .message);
+    server::apply(s_,
+                  server::parse_client_message(
+                      json{{"type", "drag_begin"}, {"link", "r_hand"}, {"target", target()}}.dump())
+                      .message);
     for (int k = 0; k < 8; ++k) {
       s_.drag_move(core::Vector3(target()[0], target()[1], target()[2]));
       s_.tick(1.0 / 30);
@@ -175,8 +175,8 @@ class RandomEditor {
       case 6:
         return {{"type", "key_delete"}, {"index", pick(0, std::max(0, keys - 1))}};
       case 7:
-        return {{"type", "key_move"}, {"index", pick(0, std::max(0, keys - 1))},
-                {"time", real(0, 10)}};
+        return {
+            {"type", "key_move"}, {"index", pick(0, std::max(0, keys - 1))}, {"time", real(0, 10)}};
       case 8:
         return {{"type", "set_settings"}, {"settings", {{"damping", real(0.01, 0.1)}}}};
       case 9:
@@ -365,10 +365,9 @@ TEST(SessionJournal, AnEditThatCannotBeWrittenGetsAnErrorAndIsTakenBackExactly) 
   const std::string before = state();
   {
     FileSizeLimit full(0);
-    for (const json& m : {json{{"type", "pin"}, {"link", "l_foot"}},
-                          json{{"type", "key_insert"}, {"time", 2}},
-                          json{{"type", "undo"}},
-                          json{{"type", "set_falloff"}, {"seconds", 1.5}}}) {
+    for (const json& m :
+         {json{{"type", "pin"}, {"link", "l_foot"}}, json{{"type", "key_insert"}, {"time", 2}},
+          json{{"type", "undo"}}, json{{"type", "set_falloff"}, {"seconds", 1.5}}}) {
       const json answer = post(m, 10);
       ASSERT_EQ(answer.value("type", ""), "error") << m << " -> " << answer;
       EXPECT_NE(answer.at("message").get<std::string>().find(m.at("type").get<std::string>() +
@@ -391,8 +390,7 @@ TEST(SessionJournal, AnEditThatCannotBeWrittenGetsAnErrorAndIsTakenBackExactly) 
   }
   // with room again the history is the one before: redo brings back the key at 1 s
   ASSERT_EQ(post({{"type", "redo"}}, 20).at("type"), "ack");
-  const std::size_t keys =
-      actor.call([](animator::Session& s) { return s.keys().keys().size(); });
+  const std::size_t keys = actor.call([](animator::Session& s) { return s.keys().keys().size(); });
   EXPECT_EQ(keys, 2u);
   const std::string saved = actor.call([](animator::Session& s) { return document_of(s); });
   actor.stop();
