@@ -30,6 +30,9 @@ int serve(const server::ServerOptions& options) {
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  // a write past a file size limit fails (EFBIG) and is reported on the edit, like a full disk,
+  // instead of killing the server
+  signal(SIGXFSZ, SIG_IGN);
 
   if (!server::is_loopback_host(options.host)) {
     std::cerr << "pindrag serve: WARNING: listening on " << options.host

@@ -185,9 +185,10 @@ std::string ack_message(const json& id, const std::string& request) {
   return json{{"type", "ack"}, {"id", id}, {"request", request}}.dump();
 }
 
-std::string error_message(const json& id, const std::string& message) {
+std::string error_message(const json& id, const std::string& message, const std::string& code) {
   json j{{"type", "error"}, {"message", message}};
   if (!id.is_null()) j["id"] = id;
+  if (!code.empty()) j["code"] = code;
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 

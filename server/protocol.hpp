@@ -52,7 +52,12 @@ nlohmann::json snapshot_json(const animator::Session& session, const std::string
 /// `report` of a solver step.
 nlohmann::json report_json(const ik::Report& report);
 std::string ack_message(const nlohmann::json& id, const std::string& request);
-std::string error_message(const nlohmann::json& id, const std::string& message);
+/// `code`, when not empty, tells kinds of error apart: kNotSaved.
+std::string error_message(const nlohmann::json& id,
+                          const std::string& message,
+                          const std::string& code = "");
+/// The `code` of an `error` on an edit the server could not save (and so took back).
+constexpr const char* kNotSaved = "not_saved";
 
 /// The binary pose frame of the session's current pose.
 std::string encode_pose_frame(const animator::Session& session,

@@ -250,8 +250,10 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
     try {
       save_edit(to_json(request.message), std::move(*checkpoint));
     } catch (const animator::SessionWriteError& e) {
-      send_to(connection, error_message(request.id, std::string(message_type(request.message)) +
-                                                        ": " + e.what()));
+      send_to(
+          connection,
+          error_message(request.id, std::string(message_type(request.message)) + ": " + e.what(),
+                        kNotSaved));
       after_edit();  // every page draws the state again, without the edit
       return;
     }
@@ -300,10 +302,10 @@ void SessionActor::settle() {
   } catch (const animator::SessionWriteError& e) {
     std::cerr << "pindrag serve: session " << id_ << ": the settled pose not saved: " << e.what()
               << "\n";
-    broadcast_text(error_message(nullptr,
-                                 "session: the pose the figure came to rest in is not "
-                                 "saved (" +
-                                     std::generic_category().message(e.error()) + ")"));
+    const std::string why = std::generic_category().message(e.error());
+    broadcast_text(error_message(
+        nullptr, "session: the pose the figure came to rest in is not saved (" + why + ")",
+        kNotSaved));
     std::lock_guard lock(mutex_);
     ++stats_.save_failures;
     return;

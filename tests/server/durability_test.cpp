@@ -459,6 +459,7 @@ TEST_F(DurabilityTest, AFullDiskGivesAnErrorPerEditAndLosesNothing) {
     }
     ASSERT_EQ(answer.at("type"), "error") << m << " -> " << answer;
     EXPECT_EQ(answer.at("message"), type + ": not saved (File too large), so not applied");
+    EXPECT_EQ(answer.value("code", ""), "not_saved");
     EXPECT_EQ(snapshot(*srv, s), before) << "after " << m;
   }
   // HTTP edits answer 507

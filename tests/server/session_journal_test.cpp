@@ -370,6 +370,7 @@ TEST(SessionJournal, AnEditThatCannotBeWrittenGetsAnErrorAndIsTakenBackExactly) 
           json{{"type", "undo"}}, json{{"type", "set_falloff"}, {"seconds", 1.5}}}) {
       const json answer = post(m, 10);
       ASSERT_EQ(answer.value("type", ""), "error") << m << " -> " << answer;
+      EXPECT_EQ(answer.value("code", ""), "not_saved");
       EXPECT_NE(answer.at("message").get<std::string>().find(m.at("type").get<std::string>() +
                                                              ": not saved (File too large)"),
                 std::string::npos)

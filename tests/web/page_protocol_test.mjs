@@ -1,8 +1,8 @@
 // The page against a protocol stub (no solver): it loads without errors and draws the figure; a drag
 // from a joint handle sends drag_begin, increasing drag_move seqs and drag_end and leaves the camera
 // alone; right-click and P send pin/unpin (also next to the pin gizmo); Space, I, Ctrl+Z and
-// Ctrl+Shift+Z send play, key_insert, undo and redo; a dropped connection comes back by itself and
-// asks for a new snapshot.
+// Ctrl+Shift+Z send play, key_insert, undo and redo; an edit the server could not save is shown as
+// not saved and not drawn; a dropped connection comes back by itself and asks for a new snapshot.
 // Usage: node tests/web/page_protocol_test.mjs
 
 import { test, after, before } from 'node:test';
@@ -109,6 +109,32 @@ test('pins, playback, keys and undo/redo go out as protocol messages', async () 
   await page.keyboard.press('Control+Shift+z');
   await waitForMessage((m) => m.type === 'redo', start, 'redo');
   await page.screenshot({ path: path.join(out, 'key.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('an edit the server could not save shows as not saved and is not drawn', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const pinsBefore = await page.evaluate(() => window.pindrag.session.pins.length);
+  const head = await page.evaluate(() => window.pindrag.project('head'));
+  stub.control.failSaves = true;
+  let start = stub.received.length;
+  await page.mouse.click(head.x, head.y, { button: 'right' });
+  const pin = await waitForMessage((m) => m.type === 'pin', start, 'pin');
+  assert.equal(pin.link, 'head');
+  assert.ok(pin.id !== undefined, 'the pin carries no id, so the page cannot hear about it');
+  await page.waitForSelector('#not-saved:not([hidden])');
+  await page.waitForSelector('.toast.error:has-text("not saved")');
+  assert.equal(await page.locator('.readout .value[data-key="saving"]').textContent(), 'not saved');
+  assert.equal(await page.evaluate(() => window.pindrag.session.pins.length), pinsBefore, 'the refused pin is shown');
+  await page.screenshot({ path: path.join(out, 'not_saved.png') });
+  // with room again the next edit is saved and the warning goes
+  stub.control.failSaves = false;
+  start = stub.received.length;
+  await page.mouse.click(head.x, head.y, { button: 'right' });
+  await waitForMessage((m) => m.type === 'pin', start, 'pin');
+  await page.waitForSelector('#not-saved', { state: 'hidden' });
+  assert.equal(await page.evaluate(() => window.pindrag.session.pins.length), pinsBefore + 1);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -37,8 +37,11 @@ export function createConnection(state, wsUrl) {
     signals.connectionChanged.dispatch({ status: s, ...extra });
   }
 
+  // Every edit carries an id, so the server answers it: `ack` once it is saved, `error` when it
+  // was refused or could not be saved (then it was taken back). Drag samples need no answer.
   function rawSend(m) {
     if (!ws || ws.readyState !== WebSocket.OPEN) return false;
+    if (m.id === undefined && m.type !== 'hello' && m.type !== 'drag_move') m = { ...m, id: nextId++ };
     ws.send(JSON.stringify(m));
     return true;
   }
@@ -175,10 +178,17 @@ export function createConnection(state, wsUrl) {
         break;
       case 'ack':
         signals.ackReceived.dispatch({ id: m.id, request: m.request });
+        signals.savingChanged.dispatch({ saved: true });
         break;
       case 'error':
         signals.serverError.dispatch({ id: m.id, message: m.message || 'error' });
-        signals.notify.dispatch({ text: m.message || 'the server refused a request', kind: 'error' });
+        if (m.code === 'not_saved') {
+          // the server took the edit back and sends the state it kept
+          signals.savingChanged.dispatch({ saved: false, message: m.message });
+          signals.notify.dispatch({ text: m.message, kind: 'error' });
+        } else {
+          signals.notify.dispatch({ text: m.message || 'the server refused a request', kind: 'error' });
+        }
         break;
       case 'report':
         state.report = m;

@@ -1,4 +1,4 @@
-// Live readouts: connection, solver time per step, drag error, pin drift, limit violation, the
+// Live readouts: connection, whether the last edit was saved, solver time per step, drag error, pin drift, limit violation, the
 // pose stream rate and the drag round trip (drag_move sent -> pose that acknowledges it).
 
 import { h, panel, fmt } from './panel_util.js';
@@ -13,6 +13,7 @@ export function createStatusPanel(state, connection) {
   };
   body.append(
     row('connection', 'Connection'),
+    row('saving', 'Last edit'),
     row('microseconds', 'Solver step', 'µs'),
     row('drag_error', 'Drag error', 'mm'),
     row('pin_position_error', 'Pin drift', 'mm'),
@@ -29,6 +30,11 @@ export function createStatusPanel(state, connection) {
     rows.connection.textContent = text;
     rows.connection.className = `value conn-${c.status}`;
     rows.connection.title = c.message || '';
+  });
+  state.signals.savingChanged.add(({ saved, message }) => {
+    rows.saving.textContent = saved ? 'saved' : 'not saved';
+    rows.saving.classList.toggle('bad', !saved);
+    rows.saving.title = saved ? '' : message || '';
   });
   state.signals.reportReceived.add((r) => {
     rows.microseconds.textContent = fmt(r.microseconds, 0);

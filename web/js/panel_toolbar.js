@@ -99,6 +99,12 @@ export function createToolbar(state, api, connection, actions) {
     badge.querySelector('.text').textContent = text;
     badge.title = c.message || '';
   });
+  // stays until an edit is saved again: the server could not write the last one and undid it
+  const notSaved = h('span.save-badge#not-saved', { hidden: true }, 'not saved');
+  signals.savingChanged.add(({ saved, message }) => {
+    notSaved.hidden = saved;
+    notSaved.title = saved ? '' : `${message || 'the server could not save'}; the edit is undone`;
+  });
   const help = h('button.icon#help', { type: 'button', title: 'Keyboard and mouse (?)', onclick: () => signals.helpToggled.dispatch() }, '?');
 
   signals.characterLoaded.add((c) => {
@@ -122,6 +128,7 @@ export function createToolbar(state, api, connection, actions) {
     h('div.spacer'),
     h('div.group', {}, uploadButton, fileInput),
     h('div.group', {}, h('span.group-label', {}, 'Export'), exportButtons),
+    notSaved,
     badge,
     help,
   );

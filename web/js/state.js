@@ -35,6 +35,7 @@ export const SIGNAL_NAMES = [
   'reportReceived', // the solver's live report
   'serverError', // {message, request}
   'ackReceived', // {id, request}
+  'savingChanged', // {saved: bool, message?} — whether the server could save the last edit
   'hoverChanged', // link index or -1
   'selectionChanged', // link index or -1
   'dragChanged', // {active, link, target (THREE.Vector3) | null}

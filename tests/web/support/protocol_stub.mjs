@@ -111,6 +111,8 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
   });
   const wss = new WebSocketServer({ server, path: '/ws' });
   let frame = 0;
+  const control = { failSaves: false }; // true: edits are answered as a server with a full disk would
+  const EDITS = new Set(['pin', 'unpin', 'key_insert', 'key_delete', 'undo', 'redo']);
   wss.on('connection', (ws) => {
     let ack = 0;
     const sendPose = () => ws.send(encodePose({ frame: ++frame, ack, time: session.playback.time, links: rest.links }));
@@ -119,6 +121,13 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
       if (isBinary) return;
       const m = JSON.parse(String(data));
       received.push(m);
+      if (control.failSaves && EDITS.has(m.type)) {
+        // not saved, so not applied: an error on the edit's id and the unchanged state again
+        const message = `${m.type}: not saved (No space left on device), so not applied`;
+        ws.send(JSON.stringify({ type: 'error', id: m.id, code: 'not_saved', message }));
+        sendState();
+        return;
+      }
       switch (m.type) {
         case 'hello':
           ws.send(JSON.stringify({ type: 'snapshot', ...snapshot() }));
@@ -150,6 +159,7 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
   return {
     url: `http://127.0.0.1:${server.address().port}/`,
     received,
+    control,
     dropConnections: () => wss.clients.forEach((c) => c.terminate()),
     close: () => new Promise((resolve) => {
       wss.clients.forEach((c) => c.terminate());
