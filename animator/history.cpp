@@ -5,13 +5,13 @@
 namespace animator {
 
 DocumentChange::DocumentChange(Document before, Document after, std::string label, int gesture)
-    : before_(std::move(before)),
-      after_(std::move(after)),
+    : before_(std::make_shared<const Document>(std::move(before))),
+      after_(std::make_shared<const Document>(std::move(after))),
       label_(std::move(label)),
       gesture_(gesture) {}
 
-void DocumentChange::apply(Session& s) { s.apply_document(after_); }
-void DocumentChange::revert(Session& s) { s.apply_document(before_); }
+void DocumentChange::apply(Session& s) { s.apply_document(*after_); }
+void DocumentChange::revert(Session& s) { s.apply_document(*before_); }
 
 std::unique_ptr<Command> DocumentChange::clone() const {
   return std::make_unique<DocumentChange>(*this);

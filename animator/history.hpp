@@ -37,10 +37,11 @@ class DocumentChange final : public Command {
   std::unique_ptr<Command> clone() const override;
   int gesture() const { return gesture_; }
   /// The state this change ends in (after settling, see History::amend).
-  void set_after(const Document& after) { after_ = after; }
+  void set_after(const Document& after) { after_ = std::make_shared<const Document>(after); }
 
  private:
-  Document before_, after_;
+  // shared and never changed in place, so a clone (History::checkpoint) copies two pointers
+  std::shared_ptr<const Document> before_, after_;
   std::string label_;
   int gesture_;  // entries with the same gesture id (> 0) merge
 };

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -229,127 +230,117 @@ struct Expected {
   }
 };
 
-// One random edit (a drag gesture counts as one: its drag_end is what gets acknowledged) and
-// what it does to `e` once acknowledged.
+// An edit to send and what it does to the expected state once acknowledged.
+struct Edit {
+  json message;
+  std::function<void(Expected&)> effect;
+};
+
+// Random edits; a drag gesture counts as one (its drag_end is what gets acknowledged).
 class Edits {
  public:
   explicit Edits(unsigned seed) : rng_(seed) {}
 
-  // sends the edit over `ws` and returns its answer; applies it to `e` when acknowledged
+  // sends one edit over `ws` and returns its answer; applies it to `e` when acknowledged
   json run(WsClient& ws, Expected& e, int id) {
-    static const char* kLinks[] = {"l_foot", "r_foot", "l_hand", "head", "pelvis", "l_farm"};
-    const std::string link = kLinks[pick(0, 5)];
-    std::vector<std::string> pinned;
-    for (const auto& p : e.pin_modes) pinned.push_back(p.first);
-    const int n = static_cast<int>(e.keys.size());
-    json m;
-    std::function<void()> effect;
-    switch (pick(0, 12)) {
-      case 0:
-      case 1: {
-        const std::string mode = pick(0, 1) ? "position" : "pose";
-        m = {{"type", "pin"}, {"link", link}, {"mode", mode}};
-        effect = [&e, link, mode] {
-          e.pin_modes[link] = mode;
-          e.pin_targets.erase(link);
-        };
-        break;
+    const int kind = pick(0, 12);
+    if (kind == 12) {
+      // a gesture: the hand dragged 10 cm in five samples
+      const json begin = {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", {0.3, 1, 0}}};
+      if (request(ws, begin, -id).value("type", "") != "ack") return begin;
+      for (int k = 1; k <= 5; ++k) {
+        ws.send({{"type", "drag_move"}, {"seq", ++seq_}, {"target", {0.3, 1 + 0.02 * k, 0}}});
       }
-      case 2:
-        if (pinned.empty()) return run(ws, e, id);
-        m = {{"type", "unpin"}, {"link", pinned[pick(0, static_cast<int>(pinned.size()) - 1)]}};
-        effect = [&e, l = m["link"].get<std::string>()] {
-          e.pin_modes.erase(l);
-          e.pin_targets.erase(l);
-        };
-        break;
-      case 3: {
-        if (pinned.empty()) return run(ws, e, id);
-        const std::string l = pinned[pick(0, static_cast<int>(pinned.size()) - 1)];
-        const json target = {real(-0.5, 0.5), real(0, 1.5), real(-0.5, 0.5)};
-        m = {{"type", "move_pin"}, {"link", l}, {"target", target}};
-        effect = [&e, l, target] { e.pin_targets[l] = target; };
-        break;
-      }
-      case 4:
-      case 5: {
-        const double t = pick(0, 400) * 0.25;
-        const std::string interpolation = pick(0, 1) ? "smooth" : "linear";
-        m = {{"type", "key_insert"}, {"time", t}, {"interpolation", interpolation}};
-        effect = [&e, t, interpolation] { e.insert_key(t, interpolation); };
-        break;
-      }
-      case 6: {
-        if (n == 0) return run(ws, e, id);
-        const int i = pick(0, n - 1);
-        m = {{"type", "key_delete"}, {"index", i}};
-        effect = [&e, i] { e.keys.erase(e.keys.begin() + i); };
-        break;
-      }
-      case 7: {
-        if (n == 0) return run(ws, e, id);
-        const int i = pick(0, n - 1);
-        const double t = pick(0, 400) * 0.25 + 0.125;
-        m = {{"type", "key_move"}, {"index", i}, {"time", t}};
-        effect = [&e, i, t] {
-          const std::string interpolation = e.keys[i].second;
-          e.keys.erase(e.keys.begin() + i);
-          e.insert_key(t, interpolation);
-        };
-        break;
-      }
-      case 8: {
-        const double d = real(0.01, 0.1);
-        m = {{"type", "set_settings"}, {"settings", {{"damping", d}}}};
-        effect = [&e, d] { e.damping = d; };
-        break;
-      }
-      case 9: {
-        const bool g = !e.gravity;
-        m = {{"type", "set_effects"}, {"scene", {{"gravity", g}}}};
-        effect = [&e, g] { e.gravity = g; };
-        break;
-      }
-      case 10: {
-        const double f = real(0, 2), s = real(-2, 2), t = real(0, 100);
-        switch (pick(0, 2)) {
-          case 0:
-            m = {{"type", "set_falloff"}, {"seconds", f}};
-            effect = [&e, f] { e.falloff = f; };
-            break;
-          case 1:
-            m = {{"type", "set_speed"}, {"speed", s}};
-            effect = [&e, s] { e.speed = s; };
-            break;
-          default:
-            m = {{"type", "seek"}, {"time", t}};
-            effect = [&e, t] { e.time = std::min(t, e.duration); };
-        }
-        break;
-      }
-      case 11: {
-        const double start = real(0, 10), end = start + real(0, 10);
-        m = {{"type", "set_loop"}, {"loop", true}, {"start", start}, {"end", end}};
-        effect = [&e, start, end] { e.loop = {true, start, end}; };
-        break;
-      }
-      default: {
-        // a gesture: the hand dragged 10 cm in five samples
-        const json begin = {{"type", "drag_begin"}, {"link", "r_hand"}, {"target", {0.3, 1, 0}}};
-        if (request(ws, begin, -id).value("type", "") != "ack") return nullptr;
-        for (int k = 1; k <= 5; ++k) {
-          ws.send({{"type", "drag_move"}, {"seq", ++seq_}, {"target", {0.3, 1 + 0.02 * k, 0}}});
-        }
-        m = {{"type", "drag_end"}};
-        effect = [] {};
-      }
+      return request(ws, {{"type", "drag_end"}}, id);
     }
-    const json answer = request(ws, m, id);
-    if (answer.value("type", "") == "ack") effect();
+    const Edit edit = kind < 4 ? pin_edit(e) : kind < 8 ? key_edit(e) : setting_edit();
+    const json answer = request(ws, edit.message, id);
+    if (answer.value("type", "") == "ack") edit.effect(e);
     return answer;
   }
 
  private:
+  Edit pin_edit(const Expected& e) {
+    static const char* kLinks[] = {"l_foot", "r_foot", "l_hand", "head", "pelvis", "l_farm"};
+    std::vector<std::string> pinned;
+    for (const auto& p : e.pin_modes) pinned.push_back(p.first);
+    const int kind = pinned.empty() ? 0 : pick(0, 3);
+    if (kind <= 1) {
+      const std::string link = kLinks[pick(0, 5)], mode = pick(0, 1) ? "position" : "pose";
+      return {{{"type", "pin"}, {"link", link}, {"mode", mode}}, [link, mode](Expected& x) {
+                x.pin_modes[link] = mode;
+                x.pin_targets.erase(link);
+              }};
+    }
+    const std::string link = pinned[pick(0, static_cast<int>(pinned.size()) - 1)];
+    if (kind == 2) {
+      return {{{"type", "unpin"}, {"link", link}}, [link](Expected& x) {
+                x.pin_modes.erase(link);
+                x.pin_targets.erase(link);
+              }};
+    }
+    const json target = {real(-0.5, 0.5), real(0, 1.5), real(-0.5, 0.5)};
+    return {{{"type", "move_pin"}, {"link", link}, {"target", target}},
+            [link, target](Expected& x) { x.pin_targets[link] = target; }};
+  }
+
+  Edit key_edit(const Expected& e) {
+    const int n = static_cast<int>(e.keys.size());
+    const int kind = n == 0 ? 0 : pick(0, 3);
+    if (kind <= 1) {
+      const double t = pick(0, 400) * 0.25;
+      const std::string interpolation = pick(0, 1) ? "smooth" : "linear";
+      return {{{"type", "key_insert"}, {"time", t}, {"interpolation", interpolation}},
+              [t, interpolation](Expected& x) { x.insert_key(t, interpolation); }};
+    }
+    const int i = pick(0, n - 1);
+    if (kind == 2) {
+      return {{{"type", "key_delete"}, {"index", i}},
+              [i](Expected& x) { x.keys.erase(x.keys.begin() + i); }};
+    }
+    const double t = pick(0, 400) * 0.25 + 0.125;
+    return {{{"type", "key_move"}, {"index", i}, {"time", t}}, [i, t](Expected& x) {
+              const std::string interpolation = x.keys[i].second;
+              x.keys.erase(x.keys.begin() + i);
+              x.insert_key(t, interpolation);
+            }};
+  }
+
+  Edit setting_edit() {
+    switch (pick(0, 5)) {
+      case 0: {
+        const double d = real(0.01, 0.1);
+        return {{{"type", "set_settings"}, {"settings", {{"damping", d}}}},
+                [d](Expected& x) { x.damping = d; }};
+      }
+      case 1: {
+        const bool g = pick(0, 1) == 1;
+        return {{{"type", "set_effects"}, {"scene", {{"gravity", g}}}},
+                [g](Expected& x) { x.gravity = g; }};
+      }
+      case 2: {
+        const double f = real(0, 2);
+        return {{{"type", "set_falloff"}, {"seconds", f}}, [f](Expected& x) { x.falloff = f; }};
+      }
+      case 3: {
+        const double v = real(-2, 2);
+        return {{{"type", "set_speed"}, {"speed", v}}, [v](Expected& x) { x.speed = v; }};
+      }
+      case 4: {
+        const double t = real(0, 100);
+        return {{{"type", "seek"}, {"time", t}},
+                [t](Expected& x) { x.time = std::min(t, x.duration); }};
+      }
+      default: {
+        const double start = real(0, 10), end = start + real(0, 10);
+        return {{{"type", "set_loop"}, {"loop", true}, {"start", start}, {"end", end}},
+                [start, end](Expected& x) {
+                  x.loop = {true, start, end};
+                }};
+      }
+    }
+  }
+
   int pick(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng_); }
   double real(double lo, double hi) { return std::uniform_real_distribution<>(lo, hi)(rng_); }
   std::mt19937 rng_;
