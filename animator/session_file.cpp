@@ -136,11 +136,13 @@ LayerStack read_layers(JsonFields& f, const JsonField& layers, const core::Model
   return out;
 }
 
-Scene read_scene(JsonFields& f, const JsonField& sc) {
+sim::Scene read_scene(JsonFields& f, const JsonField& sc) {
   f.object(sc);
-  return Scene{f.boolean_or(sc["gravity"], false), f.boolean_or(sc["ground_contact"], false),
-               f.boolean_or(sc["dynamic_pins"], false), f.boolean_or(sc["hard_limits"], false),
-               f.boolean_or(sc["self_collision"], false)};
+  sim::Scene scene;
+  for (const sim::Effect e : sim::kAllEffects) {
+    scene.set(e, f.boolean_or(sc[sim::to_string(e)], false));
+  }
+  return scene;
 }
 
 Playback read_playback(JsonFields& f, const JsonField& pb) {
@@ -175,6 +177,12 @@ Document read_document(JsonFields& f, const JsonField& j, const core::Model& m) 
 }
 
 }  // namespace
+
+json scene_to_json(const sim::Scene& scene) {
+  json j = json::object();
+  for (const sim::Effect e : sim::kAllEffects) j[sim::to_string(e)] = scene.has(e);
+  return j;
+}
 
 json settings_to_json(const ik::SolverSettings& s) {
   return {{"dt", s.dt},
@@ -242,12 +250,7 @@ json session_to_json(const Session& session, bool include_character) {
       {"keys", keys},
       {"layers", layers},
       {"settings", settings_to_json(d.settings)},
-      {"scene",
-       {{"gravity", d.scene.gravity},
-        {"ground_contact", d.scene.ground_contact},
-        {"dynamic_pins", d.scene.dynamic_pins},
-        {"hard_limits", d.scene.hard_limits},
-        {"self_collision", d.scene.self_collision}}},
+      {"scene", scene_to_json(d.scene)},
       {"edit_falloff", d.edit_falloff},
       {"playback",
        {{"time", p.time},

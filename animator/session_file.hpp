@@ -29,6 +29,8 @@ std::unique_ptr<Session> load_session(const std::string& path);
 
 /// The settings as JSON and back (also used by the wire protocol of the server).
 nlohmann::json settings_to_json(const ik::SolverSettings& s);
+/// The scene as {"gravity": bool, ...}: every effect of sim::kAllEffects by name.
+nlohmann::json scene_to_json(const sim::Scene& scene);
 /// Applies the keys present in j to `s`; unknown keys and bad values raise SessionError.
 void settings_from_json(const nlohmann::json& j, ik::SolverSettings& s);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include "server/messages.hpp"
@@ -135,23 +136,13 @@ ik::TaskMode task_mode(const Fields& f) {
   f.fail("mode", "must be \"position\", \"orientation\" or \"pose\"");
 }
 
-animator::Scene scene_from(const Fields& f, const json& j) {
-  animator::Scene scene;
-  const std::pair<const char*, bool animator::Scene::*> flags[] = {
-      {"gravity", &animator::Scene::gravity},
-      {"ground_contact", &animator::Scene::ground_contact},
-      {"dynamic_pins", &animator::Scene::dynamic_pins},
-      {"hard_limits", &animator::Scene::hard_limits},
-      {"self_collision", &animator::Scene::self_collision}};
-  for (const auto& [name, member] : flags) {
-    if (!j.contains(name)) continue;
-    if (!j[name].is_boolean()) f.fail(std::string("scene.") + name, "must be true or false");
-    scene.*member = j[name].get<bool>();
-  }
+sim::Scene scene_from(const Fields& f, const json& j) {
+  sim::Scene scene;
   for (const auto& [key, value] : j.items()) {
-    bool known = false;
-    for (const auto& flag : flags) known = known || key == flag.first;
-    if (!known) f.fail("scene." + key.substr(0, 64), "is not a scene effect");
+    const std::optional<sim::Effect> effect = sim::effect_from_string(key);
+    if (!effect) f.fail("scene." + key.substr(0, 64), "is not a scene effect");
+    if (!value.is_boolean()) f.fail("scene." + key, "must be true or false");
+    scene.set(*effect, value.get<bool>());
   }
   return scene;
 }
