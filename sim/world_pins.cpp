@@ -86,7 +86,8 @@ void World::contact_joint_forces(int b) {
       if (link < 0) continue;
       core::point_jacobian(*w.dynamics, w.data, link, w.data.X_W[link].inverse_apply(p.ref_W),
                            w.handle_jacobian);
-      w.contact_force.noalias() += sign * w.handle_jacobian.angular.transpose() * p.wrench.head<3>();
+      w.contact_force.noalias() +=
+          sign * w.handle_jacobian.angular.transpose() * p.wrench.head<3>();
       w.contact_force.noalias() += sign * w.handle_jacobian.linear.transpose() * p.wrench.tail<3>();
     }
   }

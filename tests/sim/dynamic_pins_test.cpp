@@ -184,8 +184,9 @@ TEST(DynamicPins, OffMeansTheProblemIsIgnored) {
     for (int i = 0; i < 200; ++i) f->world.step();
   }
   EXPECT_EQ(with.world.body(0).q, without.world.body(0).q);
-  EXPECT_EQ(with.world.pin_solver(0)->report().top_rows + with.world.pin_solver(0)->report().lower_rows,
-            0)
+  EXPECT_EQ(
+      with.world.pin_solver(0)->report().top_rows + with.world.pin_solver(0)->report().lower_rows,
+      0)
       << "the solver never ran";
 }
 
