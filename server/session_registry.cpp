@@ -80,6 +80,11 @@ void SessionRegistry::make_room(std::unique_lock<std::mutex>&) {
     if (idle && (victim == entries_.end() || e.last_used < victim->second.last_used)) victim = it;
   }
   if (live < options_.max_live) return;
+  if (!store_.persistent()) {
+    throw SessionsBusy("the server holds " + std::to_string(options_.max_live) +
+                       " sessions in memory and has no data directory to move idle ones to "
+                       "(rule: --max-live-sessions, or --data-dir)");
+  }
   if (victim == entries_.end()) {
     throw SessionsBusy("all " + std::to_string(options_.max_live) +
                        " live sessions are in use by open pages or requests (rule: at most "
@@ -276,13 +281,7 @@ void SessionRegistry::reap() {
       store_.touch(eviction.id);
       lock.lock();
       const auto it = entries_.find(eviction.id);
-      if (it != entries_.end()) {
-        if (store_.persistent()) {
-          it->second.state = State::kStored;
-        } else {
-          entries_.erase(it);  // nothing to come back from
-        }
-      }
+      if (it != entries_.end()) it->second.state = State::kStored;
       changed_.notify_all();
       continue;
     }

@@ -4,7 +4,8 @@
 // recently used idle session (one nobody holds: no WebSocket, no request in flight) is stopped
 // (it saves its last state) and leaves memory; it comes back from disk the next time it is
 // found. Sessions untouched for `expire_days` are deleted (off by default).
-// Without a data directory there is nothing to come back from: an evicted session is gone.
+// Without a data directory there is nothing to come back from, so nothing leaves memory:
+// `max_live` is then the number of sessions the server holds.
 //
 // Thread contract: every function may be called from any thread. One mutex guards the index;
 // loading, saving and stopping happen outside it, and a session being loaded or stopped is
@@ -33,7 +34,8 @@
 namespace server {
 
 /// Every live session is in use (held by a connection or a request), so none can make room for
-/// another: a temporary refusal (HTTP 503 with Retry-After), never a lockout.
+/// another: a temporary refusal (HTTP 503 with Retry-After). (Without a data directory, where
+/// sessions cannot leave memory, a full registry refuses so too.)
 class SessionsBusy : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -119,15 +119,22 @@ TEST_F(SessionRegistryTest, RemoveNeedsTheTokenRefusesASessionInUseAndDeletesIts
   EXPECT_EQ(r->size(), 0u);
 }
 
-TEST_F(SessionRegistryTest, WithoutADataFolderAnEvictedSessionIsGone) {
-  auto r = registry(1, /*on_disk=*/false);
+TEST_F(SessionRegistryTest, WithoutADataFolderNothingLeavesMemoryAndAFullRegistryRefuses) {
+  auto r = registry(2, /*on_disk=*/false);
   server::SessionHandle a = r->create(new_session());
-  const std::string id = a.id, token = a.token;
   a.actor.reset();
-  server::SessionHandle b = r->create(new_session());
-  EXPECT_TRUE(eventually([&] { return r->size() == 1; }));
-  EXPECT_EQ(r->find(id, token).status, 404);
-  EXPECT_EQ(r->find(b.id, b.token).status, 200);
+  r->create(new_session());
+  // a and b idle, but they have nowhere to go: a third is refused, naming the rule
+  try {
+    r->create(new_session());
+    ADD_FAILURE() << "a third session was created";
+  } catch (const server::SessionsBusy& e) {
+    EXPECT_NE(std::string(e.what()).find("--data-dir"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(r->size(), 2u);
+  EXPECT_EQ(r->find(a.id, a.token).status, 200);
+  EXPECT_EQ(r->remove(a.id, a.token), 200);
+  EXPECT_NO_THROW(r->create(new_session()));
 }
 
 }  // namespace
