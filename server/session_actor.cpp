@@ -193,6 +193,14 @@ void SessionActor::process(Item& item) {
     case Item::Kind::kUnsubscribe:
       subscribers_.erase(item.connection);
       last_seq_.erase(item.connection);
+      if (drag_owner_ == item.connection) {
+        // the client left mid-gesture: end its drag as a drag_end would (one undo entry)
+        drag_owner_.reset();
+        if (session_->dragging()) {
+          session_->drag_end();
+          after_edit();
+        }
+      }
       break;
     case Item::Kind::kCall:
       item.call(*session_);
@@ -214,6 +222,8 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
     send_to(connection, error_message(request.id, e.what()));
     return;
   }
+  if (std::holds_alternative<DragBegin>(request.message)) drag_owner_ = connection;
+  if (std::holds_alternative<DragEnd>(request.message)) drag_owner_.reset();
   if (!request.id.is_null())
     send_to(connection, ack_message(request.id, message_type(request.message)));
   // a drag shows in the pose frames; anything else may change what `state` carries
