@@ -9,9 +9,9 @@
 #include "animator/edit_layer.hpp"
 #include "animator/keyframes.hpp"
 #include "animator/pin.hpp"
-#include "animator/scene.hpp"
 #include "core/clip.hpp"
 #include "ik/solver.hpp"
+#include "sim/scene.hpp"
 
 namespace animator {
 
@@ -25,7 +25,7 @@ struct Document {
   std::shared_ptr<const core::Clip> clip;
   LayerStack layers;
   ik::SolverSettings settings;
-  Scene scene;
+  sim::Scene scene;  // the effects it simulates
   double edit_falloff = kDefaultEditFalloff;
 };
 

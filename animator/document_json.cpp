@@ -192,19 +192,19 @@ std::shared_ptr<const core::Clip> read_clip(JsonFields& f,
 
 // --- scene and playback ------------------------------------------------------------------------
 
-json scene_to_json(const Scene& s) {
-  return {{"gravity", s.gravity},
-          {"ground_contact", s.ground_contact},
-          {"dynamic_pins", s.dynamic_pins},
-          {"hard_limits", s.hard_limits},
-          {"self_collision", s.self_collision}};
+json scene_to_json(const sim::Scene& scene) {
+  json j = json::object();
+  for (const sim::Effect e : sim::kAllEffects) j[sim::to_string(e)] = scene.has(e);
+  return j;
 }
 
-Scene read_scene(JsonFields& f, const JsonField& sc) {
+sim::Scene read_scene(JsonFields& f, const JsonField& sc) {
   f.object(sc);
-  return Scene{f.boolean_or(sc["gravity"], false), f.boolean_or(sc["ground_contact"], false),
-               f.boolean_or(sc["dynamic_pins"], false), f.boolean_or(sc["hard_limits"], false),
-               f.boolean_or(sc["self_collision"], false)};
+  sim::Scene scene;
+  for (const sim::Effect e : sim::kAllEffects) {
+    scene.set(e, f.boolean_or(sc[sim::to_string(e)], false));
+  }
+  return scene;
 }
 
 json playback_to_json(const Playback& p) {

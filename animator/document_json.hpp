@@ -51,8 +51,9 @@ std::shared_ptr<const core::Clip> read_clip(io::JsonFields& f,
                                             const io::JsonField& clip,
                                             const core::Model& m);
 
-nlohmann::json scene_to_json(const Scene& s);
-Scene read_scene(io::JsonFields& f, const io::JsonField& scene);
+/// The scene as {"gravity": bool, ...}: every effect of sim::kAllEffects by name.
+nlohmann::json scene_to_json(const sim::Scene& scene);
+sim::Scene read_scene(io::JsonFields& f, const io::JsonField& scene);
 
 /// Time, speed and loop; whether it plays is not saved.
 nlohmann::json playback_to_json(const Playback& p);

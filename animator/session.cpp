@@ -192,7 +192,7 @@ void Session::set_solver_settings(const ik::SolverSettings& s) {
   settling_ = true;
 }
 
-void Session::set_scene(const Scene& scene) {
+void Session::set_scene(const sim::Scene& scene) {
   const Document before = doc_;
   doc_.scene = scene;
   commit(before, "scene effects");

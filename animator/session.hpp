@@ -22,7 +22,6 @@
 #include "animator/keyframes.hpp"
 #include "animator/motion_editor.hpp"
 #include "animator/pin.hpp"
-#include "animator/scene.hpp"
 #include "core/clip.hpp"
 #include "core/data.hpp"
 #include "core/model.hpp"
@@ -105,8 +104,8 @@ class Session {
   // --- settings ------------------------------------------------------------------------------
   void set_solver_settings(const ik::SolverSettings& settings);
   const ik::SolverSettings& solver_settings() const { return doc_.settings; }
-  void set_scene(const Scene& scene);
-  const Scene& scene() const { return doc_.scene; }
+  void set_scene(const sim::Scene& scene);
+  const sim::Scene& scene() const { return doc_.scene; }
   void set_edit_falloff(double seconds);
   double edit_falloff() const { return doc_.edit_falloff; }
 

@@ -199,7 +199,8 @@ int main(int argc, char** argv) {
   server::ServerOptions options;
   options.port = 0;
   options.ws_port = 0;
-  options.web_root = web.string();  // sessions in memory: the benchmark measures the live path
+  options.web_root = web.string();   // sessions in memory: the benchmark measures the live path
+  options.max_live_sessions = 4096;  // ... which then holds every session it creates
   server::Server srv(options);
   srv.start();
   std::printf("cores: %u\n", std::thread::hardware_concurrency());

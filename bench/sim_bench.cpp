@@ -7,7 +7,8 @@
 // standing state; the restart is not timed. MuJoCo cannot skip what a scene does not ask for:
 // with every effect disabled mj_step still runs its whole smooth dynamics, which is what
 // BM_Step_MuJoCo/none shows.
-// Rows: BM_Step/<effects>, BM_Step_MuJoCo/<effects>; "gcf" = gravity + ground contact + friction.
+// Rows: BM_Step/<effects>, BM_Step_MuJoCo/<effects>; "gcf" = gravity + ground contact + friction;
+// BM_Step/gcf_dynamic_pins is the standing figure driven by its dynamics-backed pins.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -16,7 +17,9 @@
 
 #include "bench/bench_models.hpp"
 #include "core/configuration.hpp"
+#include "core/data.hpp"
 #include "core/human_figure.hpp"
+#include "core/kinematics.hpp"
 #include "sim/placement.hpp"
 #include "sim/world.hpp"
 #include "tests/fixtures/mjcf_writer.hpp"
@@ -120,7 +123,51 @@ void step_mujoco(benchmark::State& state, const sim::Scene& scene) {
   state.counters["contacts"] = mj.d->ncon;
 }
 
+// The dynamics-backed pins' scene (Yamane §9.4): human48 standing on level feet in stiff soft
+// contact, every joint referenced to its standing value, the left hand dragged; its joints are
+// driven at acceleration level and its root moves by the contact forces.
+void step_pinned(benchmark::State& state) {
+  const core::Model& m = *figure();
+  sim::WorldSettings settings;
+  settings.contact = sim::figure_contact_settings(m.total_mass());
+  sim::World world(settings);
+  const Eigen::VectorXd q0 =
+      sim::standing_configuration(m, core::neutral_configuration(m), sim::GroundPlane{});
+  world.add_body("human48", figure(), q0);
+  sim::Scene scene;
+  scene.gravity = scene.ground_contact = scene.friction = scene.dynamic_pins = true;
+  world.set_scene(scene);
+  ik::Problem problem;
+  for (int j = 2; j < m.njoints; ++j) {
+    ik::JointReferenceTask r;
+    r.joint = j;
+    if (m.joint_type[j] == core::JointType::kSpherical) {
+      r.R_ref = core::quaternion_at(q0, m.idx_q[j]);
+    } else {
+      r.q_ref = q0[m.idx_q[j]];
+    }
+    problem.add(r);
+  }
+  core::Data data(m);
+  core::forward_kinematics(m, data, q0);
+  const int hand = m.link_index("l_hand");
+  problem.add(ik::LinkTask{.role = ik::kDrag, .link = hand, .target_W = data.X_W[hand].p});
+  world.set_pin_problem(0, problem);
+  const sim::World start = world;
+  int k = 0;
+  for (auto _ : state) {
+    if (++k % kRestartEvery == 0) {
+      state.PauseTiming();
+      world = start;
+      state.ResumeTiming();
+    }
+    world.step();
+  }
+  state.counters["contacts"] = static_cast<double>(world.contact_points().size());
+}
+
 const bool registered = [] {
+  benchmark::RegisterBenchmark("BM_Step/gcf_dynamic_pins", step_pinned);
   for (const Case& c : cases()) {
     benchmark::RegisterBenchmark((std::string("BM_Step/") + c.name).c_str(), step_ours, c.scene);
     benchmark::RegisterBenchmark((std::string("BM_Step_MuJoCo/") + c.name).c_str(), step_mujoco,

@@ -36,8 +36,9 @@ int serve(const server::ServerOptions& options) {
 
   if (!server::is_loopback_host(options.host)) {
     std::cerr << "pindrag serve: WARNING: listening on " << options.host
-              << ", not loopback only: other machines can reach this server. Every session still "
-                 "needs its token, but anyone on the network can create sessions.\n";
+              << ", not loopback only: other machines can reach this server. Every session "
+                 "needs its token, and creating or listing sessions needs the server key in the "
+                 "URL below.\n";
   }
   std::unique_ptr<server::Server> srv;
   try {
@@ -82,6 +83,15 @@ void add_serve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--web-root", options->web_root,
                   "folder of the page (default: the source tree's web/)");
+  cmd->add_option("--max-live-sessions", options->max_live_sessions,
+                  "sessions kept in memory at once; the least recently used idle one is saved "
+                  "and unloaded to make room (stored sessions are not limited)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--expire-days", options->expire_days,
+                  "delete saved sessions nobody opened or changed for this many days (0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000));
   cmd->callback([options] {
     const int code = serve(*options);
     if (code != 0) throw CLI::RuntimeError(code);

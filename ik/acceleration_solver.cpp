@@ -1,6 +1,7 @@
 #include "ik/acceleration_solver.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "core/configuration.hpp"
@@ -22,7 +23,9 @@ std::string validate(const AccelerationSettings& s) {
                                     {"range_frequency", s.range_frequency},
                                     {"max_position_error", s.max_position_error},
                                     {"max_orientation_error", s.max_orientation_error},
-                                    {"step", s.step}}) {
+                                    {"step", s.step},
+                                    {"max_joint_acceleration", s.max_joint_acceleration},
+                                    {"max_joint_speed", s.max_joint_speed}}) {
     if (!positive_finite(value)) return std::string(name) + " must be a finite number > 0";
   }
   for (const auto& [name, value] : {std::pair{"top_singular_value", s.top_singular_value},
@@ -112,8 +115,36 @@ const AccelerationReport& AccelerationSolver::solve(const Problem& problem,
   split_root(data, bias, contact);
   fill_rows(problem, data, q, v);
   solve_levels();
+  acceleration_.tail(n_) = x_.cwiseProduct(col_scale_);
+  if (!bound_joint_accelerations(v)) {
+    report_.status = AccelerationReport::Status::kRejected;
+    report_.message = "the joint accelerations are not finite";
+    return report_;
+  }
   finish(data, bias, contact);
   return report_;
+}
+
+// Cuts q̈ to the bounds of the settings; false when it is not finite.
+bool AccelerationSolver::bound_joint_accelerations(const Eigen::VectorXd& v) {
+  auto qdd = acceleration_.tail(n_);
+  if (!qdd.allFinite()) return false;
+  if (n_ == 0) return true;
+  const double largest = qdd.cwiseAbs().maxCoeff();
+  if (largest > settings_.max_joint_acceleration) {
+    qdd *= settings_.max_joint_acceleration / largest;
+    report_.bounded = true;
+  }
+  const double h = settings_.step, vmax = settings_.max_joint_speed;
+  for (int j = 0; j < n_; ++j) {
+    const double vj = v[6 + j];
+    const double cut = std::clamp(qdd[j], (-vmax - vj) / h, (vmax - vj) / h);
+    if (cut != qdd[j]) {
+      qdd[j] = cut;
+      report_.bounded = true;
+    }
+  }
+  return true;
 }
 
 void AccelerationSolver::split_root(const core::Data& data,
@@ -291,9 +322,8 @@ void AccelerationSolver::solve_levels() {
 void AccelerationSolver::finish(const core::Data& data,
                                 const Eigen::VectorXd& bias,
                                 const Eigen::VectorXd& Q) {
-  // q̈ = diag(c) x; θ̈_b = y − X q̈ (the root rows); τ from the joint rows of the EOM
-  auto qdd = acceleration_.tail(n_);
-  qdd = x_.cwiseProduct(col_scale_);
+  // θ̈_b = y − X q̈ (the root rows), q̈ = diag(c) x as bounded; τ from the joint rows of the EOM
+  const auto qdd = acceleration_.tail(n_);
   acceleration_.head<6>() = y_;
   acceleration_.head<6>().noalias() -= X_ * qdd;
   torque_.head<6>().setZero();

@@ -55,7 +55,13 @@ struct AccelerationSettings {
   double max_position_error = 0.1;     // m, the error clamp of the feedback laws
   double max_orientation_error = 1.0;  // rad
   double step = 1e-3;                  // s: the control step, for range predictions
-  bool use_joint_weights = true;       // scale joints by the model's ik_weight
+  // bounds on the joints (not the root): accelerations beyond max_joint_acceleration are scaled
+  // down together, then each joint's is cut so that its speed after the step stays within
+  // max_joint_speed; a drag the body cannot follow (a falling figure held by the hand) then
+  // lags instead of winding the joints up
+  double max_joint_acceleration = 300.0;  // rad/s² (m/s² for prismatic joints)
+  double max_joint_speed = 25.0;          // rad/s
+  bool use_joint_weights = true;          // scale joints by the model's ik_weight
 };
 
 /// Empty when usable, else a message naming the first bad field.
@@ -69,6 +75,7 @@ struct AccelerationReport {
   int top_rank = 0;
   bool top_damped = false;
   double root_residual = 0;  // |H_bb θ̈_b + H_bq q̈ + b_b − Q_b|: the root rows of the EOM
+  bool bounded = false;      // the joint accelerations were cut by the bounds of the settings
 };
 
 class AccelerationSolver {
@@ -109,6 +116,7 @@ class AccelerationSolver {
                      double weight,
                      const Eigen::VectorXd& v);
   void solve_levels();
+  bool bound_joint_accelerations(const Eigen::VectorXd& v);
   void finish(const core::Data& data, const Eigen::VectorXd& bias, const Eigen::VectorXd& Q);
 
   const core::Model& model_;

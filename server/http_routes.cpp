@@ -26,6 +26,8 @@ namespace fs = std::filesystem;
 
 constexpr const char* kVersion = "0.1.0";
 constexpr const char* kTokenHeader = "X-Session-Token";
+constexpr const char* kServerKeyHeader = "X-Server-Key";
+constexpr const char* kRetryAfterSeconds = "2";
 
 void send_json(httplib::Response& res, int status, const json& body) {
   res.status = status;
@@ -75,6 +77,18 @@ void send_file(httplib::Response& res, const fs::path& path) {
   set_uncompressed(res, bytes.str(), content_type(path));
 }
 
+// Creating and listing sessions on a server reachable from other machines needs its key.
+bool server_key_ok(const RouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
+  if (ctx.server_key.empty() ||
+      tokens_equal(req.get_header_value(kServerKeyHeader), ctx.server_key))
+    return true;
+  send_error(res, 401,
+             std::string(kServerKeyHeader) +
+                 ": missing or wrong server key (rule: a server listening beyond loopback needs "
+                 "the key it printed, ?key= in its URL)");
+  return false;
+}
+
 bool is_state_changing(const std::string& method) {
   return method == "POST" || method == "PUT" || method == "DELETE" || method == "PATCH";
 }
@@ -113,6 +127,39 @@ std::optional<int> int_param(
     throw std::invalid_argument(name);
   }
   return value;
+}
+
+// The saved sessions: the list (no tokens) and deleting one with its token.
+void register_session_list(httplib::Server& http, const RouteContext& ctx) {
+  http.Get("/api/sessions", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!server_key_ok(ctx, req, res)) return;
+    json list = json::array();
+    for (const SessionInfo& s : ctx.registry->list()) {
+      list.push_back({{"id", s.id},
+                      {"character", s.character},
+                      {"modified", s.modified},
+                      {"bytes", s.bytes},
+                      {"live", s.live}});
+    }
+    send_json(res, 200, list);
+  });
+  http.Delete(R"(/api/sessions/([^/]+))", [&ctx](const httplib::Request& req,
+                                                 httplib::Response& res) {
+    const std::string id = req.matches[1];
+    if (!is_valid_id(id))
+      return send_error(res, 404, "id: no such session (rule: 32 lowercase hex digits)");
+    switch (ctx.registry->remove(id, req.get_header_value(kTokenHeader))) {
+      case 200:
+        return send_json(res, 200, {{"deleted", id}});
+      case 401:
+        return send_error(res, 401, std::string(kTokenHeader) + ": missing or wrong session token");
+      case 409:
+        return send_error(res, 409,
+                          "id: the session is open in a page or a request; close it first");
+      default:
+        return send_error(res, 404, "id: no such session");
+    }
+  });
 }
 
 void register_static(httplib::Server& http, const RouteContext& ctx) {
@@ -154,8 +201,11 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     send_json(res, 200,
               {{"protocol", kProtocolVersion},
                {"ws_url", "ws://" + host + ":" + std::to_string(ctx.policy->ws_port()) + "/ws"},
+               {"create_needs_key", !ctx.server_key.empty()},
                {"limits",
-                {{"upload_bytes", kMaxUploadBytes}, {"ws_message_bytes", kMaxWsMessageBytes}}}});
+                {{"upload_bytes", kMaxUploadBytes},
+                 {"ws_message_bytes", kMaxWsMessageBytes},
+                 {"live_sessions", ctx.registry->options().max_live}}}});
   });
   http.Get("/api/characters", [&ctx](const httplib::Request&, httplib::Response& res) {
     json list = json::array();
@@ -168,6 +218,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     send_json(res, 200, list);
   });
   http.Post("/api/sessions", [&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (!server_key_ok(ctx, req, res)) return;
     std::unique_ptr<animator::Session> session;
     try {
       if (req.is_multipart_form_data()) {
@@ -205,15 +256,15 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       send_json(res, 201, {{"id", handle.id}, {"token", handle.token}});
     } catch (const UploadError& e) {
       send_error(res, e.status, e.what());
-    } catch (const TooManySessions& e) {
-      send_error(res, 429, e.what());
     }
   });
   http.Get(R"(/api/sessions/([^/]+))", [&ctx](const httplib::Request& req, httplib::Response& res) {
     const auto actor = session_of(ctx, req, res);
     if (!actor) return;
-    const std::string id = actor->id();
-    send_json(res, 200, actor->call([&id](animator::Session& s) { return snapshot_json(s, id); }));
+    send_json(res, 200,
+              actor->call_within(ctx.call_timeout, [id = actor->id()](animator::Session& s) {
+                return snapshot_json(s, id);
+              }));
   });
   http.Post(
       R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
@@ -227,8 +278,11 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
           core::Clip clip =
               clip_from_upload("clip", file.filename, file.content, actor->model(), ctx.temp_root);
           const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
-          actor->call([&clip](animator::Session& s) { s.set_clip(std::move(clip), "import clip"); },
-                      /*edit=*/true);
+          auto shared = std::make_shared<core::Clip>(std::move(clip));
+          actor->call_within(
+              ctx.call_timeout,
+              [shared](animator::Session& s) { s.set_clip(std::move(*shared), "import clip"); },
+              /*edit=*/true);
           send_json(res, 200, answer);
         } catch (const UploadError& e) {
           send_error(res, e.status, e.what());
@@ -247,7 +301,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       std::string name;
       const core::SkinnedMesh* skin;
     };
-    const Animation a = actor->call([](animator::Session& s) {
+    const Animation a = actor->call_within(ctx.call_timeout, [](animator::Session& s) {
       return Animation{s.animation_clip(), s.character(), s.skin()};
     });
     const std::string file_name = safe_file_name(a.name, "animation") + "." + format;
@@ -283,7 +337,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
                const core::SkinnedMesh* skin;
                int frames;
              };
-             const Pose pose = actor->call([&frame](animator::Session& s) {
+             const Pose pose = actor->call_within(ctx.call_timeout, [frame](animator::Session& s) {
                if (!frame) return Pose{s.q(), s.skin(), 0};
                const core::Clip clip = s.animation_clip();
                if (*frame >= clip.size()) return Pose{Eigen::VectorXd(), s.skin(), clip.size()};
@@ -357,6 +411,12 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
         std::string what = "internal error";
         try {
           if (error) std::rethrow_exception(error);
+        } catch (const ActorBusy& e) {
+          res.set_header("Retry-After", kRetryAfterSeconds);
+          return send_error(res, 503, e.what());
+        } catch (const SessionsBusy& e) {
+          res.set_header("Retry-After", kRetryAfterSeconds);
+          return send_error(res, 503, e.what());
         } catch (const animator::SessionWriteError& e) {
           // the server could not save: its fault, not the request's
           return send_error(res, e.out_of_space() ? 507 : 503, e.what());
@@ -375,6 +435,7 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
         send_error(res, 500, what);
       });
   register_api(http, ctx);
+  register_session_list(http, ctx);
   register_static(http, ctx);
 }
 

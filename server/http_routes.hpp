@@ -1,9 +1,11 @@
 // Every HTTP route of docs/protocol.md on a cpp-httplib server: the page and its static files,
 // three.js under /vendor/three/, the REST API, uploads, exports and thumbnails; the Host and
 // Origin checks run before routing, and every refusal is a 4xx with a JSON {"error": ...} body.
-// Handlers run on httplib's worker threads: they parse, call the session's actor and serialize.
+// Handlers run on httplib's worker threads: they parse, call the session's actor and serialize;
+// a session busy for longer than call_timeout gets 503 with Retry-After instead of a wait.
 #pragma once
 
+#include <chrono>
 #include <string>
 
 // before httplib.h: glibc's <resolv.h>, which it includes, defines a macro `_res` that breaks
@@ -17,6 +19,10 @@ namespace server {
 
 struct RouteContext {
   SessionRegistry* registry = nullptr;
+  /// How long a handler waits for a session's actor before answering 503 with Retry-After.
+  std::chrono::milliseconds call_timeout{10000};
+  /// Needed (header X-Server-Key) to create or list sessions; empty: not needed (loopback).
+  std::string server_key;
   const HostPolicy* policy = nullptr;
   std::string web_root;   // the page: index.html, js/, css/ (node_modules/three for /vendor/three/)
   std::string temp_root;  // where uploads are unpacked (empty: the system's temporary folder)

@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "animator/session_file.hpp"
+
 namespace server {
 namespace {
 
@@ -34,15 +36,7 @@ json fields_of(const MovePin& m) {
 
 json fields_of(const SetSettings& m) { return {{"settings", m.settings}}; }
 
-json fields_of(const SetEffects& m) {
-  const animator::Scene& s = m.scene;
-  return {{"scene",
-           {{"gravity", s.gravity},
-            {"ground_contact", s.ground_contact},
-            {"dynamic_pins", s.dynamic_pins},
-            {"hard_limits", s.hard_limits},
-            {"self_collision", s.self_collision}}}};
-}
+json fields_of(const SetEffects& m) { return {{"scene", animator::scene_to_json(m.scene)}}; }
 
 json fields_of(const KeyInsert& m) {
   json j{{"interpolation", animator::to_string(m.interpolation)}};

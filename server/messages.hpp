@@ -18,9 +18,9 @@
 #include <vector>
 
 #include "animator/keyframes.hpp"
-#include "animator/scene.hpp"
 #include "animator/session.hpp"
 #include "ik/task.hpp"
+#include "sim/scene.hpp"
 
 namespace server {
 
@@ -98,7 +98,7 @@ struct SetSettings {
 struct SetEffects {
   static constexpr const char* kType = "set_effects";
   static constexpr std::array kFields{"scene"};
-  animator::Scene scene{};
+  sim::Scene scene{};
   bool operator==(const SetEffects&) const = default;
 };
 

@@ -4,6 +4,7 @@
 // the message is applied.
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include "io/json_parse.hpp"
@@ -83,15 +84,22 @@ ik::TaskMode task_mode(Fields& f) {
   return *mode;
 }
 
-animator::Scene scene_from(Fields& f) {
+sim::Scene scene_from(Fields& f) {
   io::JsonFields& r = f.reader();
   const io::JsonField j = r.object(f["scene"]);
-  r.refuse_unknown_keys(
-      j, {"gravity", "ground_contact", "dynamic_pins", "hard_limits", "self_collision"});
-  return animator::Scene{
-      r.boolean_or(j["gravity"], false), r.boolean_or(j["ground_contact"], false),
-      r.boolean_or(j["dynamic_pins"], false), r.boolean_or(j["hard_limits"], false),
-      r.boolean_or(j["self_collision"], false)};
+  sim::Scene scene;
+  for (const auto& [key, value] : j->items()) {
+    const std::optional<sim::Effect> effect = sim::effect_from_string(key);
+    if (!effect) {
+      std::string names;
+      for (const sim::Effect e : sim::kAllEffects) {
+        names += (names.empty() ? "" : ", ") + std::string(sim::to_string(e));
+      }
+      r.fail(j[key], "unknown key (rule: one of " + names + ")");
+    }
+    scene.set(*effect, r.boolean(j[key]));
+  }
+  return scene;
 }
 
 // --- one reader per message with fields; fields not in docs/protocol.md are ignored ----------

@@ -123,7 +123,6 @@ json state_json(const animator::Session& s, const std::string& session_id) {
                       {"falloff", layer->falloff}});
   }
   const animator::Playback& pb = s.playback();
-  const animator::Scene& sc = s.scene();
   return {{"protocol", kProtocolVersion},
           {"session", session_id},
           {"q", std::vector<double>(s.q().data(), s.q().data() + s.q().size())},
@@ -142,12 +141,7 @@ json state_json(const animator::Session& s, const std::string& session_id) {
             {"duration", s.duration()}}},
           {"recording", s.recording()},
           {"settings", animator::settings_to_json(s.solver_settings())},
-          {"scene",
-           {{"gravity", sc.gravity},
-            {"ground_contact", sc.ground_contact},
-            {"dynamic_pins", sc.dynamic_pins},
-            {"hard_limits", sc.hard_limits},
-            {"self_collision", sc.self_collision}}},
+          {"scene", animator::scene_to_json(s.scene())},
           {"falloff", s.edit_falloff()},
           {"undo",
            {{"can_undo", s.history().can_undo()},

@@ -46,22 +46,32 @@ bool split_host_port(std::string_view header, std::string& name, int& port) {
   return !name.empty();
 }
 
+// A bare IPv6 address as it appears in a Host header: "[fe80::1]".
+std::string host_form(std::string_view address) {
+  std::string a = lower(address);
+  if (a.find(':') != std::string::npos && a.front() != '[') a = "[" + a + "]";
+  return a;
+}
+
 }  // namespace
 
-HostPolicy::HostPolicy(std::string listen_host, int http_port, int ws_port)
-    : listen_host_(lower(listen_host)),
+HostPolicy::HostPolicy(std::string listen_host,
+                       int http_port,
+                       int ws_port,
+                       const std::vector<std::string>& local_addresses)
+    : listen_host_(host_form(listen_host)),
       http_port_(http_port),
       ws_port_(ws_port),
       wildcard_(is_wildcard_address(listen_host)) {
-  if (listen_host_.find(':') != std::string::npos && listen_host_.front() != '[') {
-    listen_host_ = "[" + listen_host_ + "]";  // a bare IPv6 address as it appears in a Host header
+  if (wildcard_) {
+    for (const std::string& a : local_addresses) local_names_.push_back(host_form(a));
   }
 }
 
 bool HostPolicy::name_allowed(std::string_view name) const {
   if (name == "127.0.0.1" || name == "localhost" || name == "[::1]") return true;
-  if (name == listen_host_) return true;
-  return wildcard_ && is_ip_literal(name);
+  if (!wildcard_) return name == listen_host_;
+  return std::find(local_names_.begin(), local_names_.end(), name) != local_names_.end();
 }
 
 bool HostPolicy::host_allowed(std::string_view host_header, int port) const {

@@ -13,12 +13,15 @@
 namespace server {
 
 /// The Host headers and Origins of this server: the loopback names (127.0.0.1, localhost,
-/// [::1]) and the listen host (when it names one address), each with the HTTP or WebSocket port.
-/// A wildcard listen host (0.0.0.0, ::) also admits any IP literal, which DNS rebinding cannot
-/// produce (it needs a name).
+/// [::1]), the listen host (when it names one address) and, for a wildcard listen host (0.0.0.0,
+/// ::), the addresses the server is reachable at (`local_addresses`, e.g. from
+/// interface_addresses()), each with the HTTP or WebSocket port. No other name or IP literal.
 class HostPolicy {
  public:
-  HostPolicy(std::string listen_host, int http_port, int ws_port);
+  HostPolicy(std::string listen_host,
+             int http_port,
+             int ws_port,
+             const std::vector<std::string>& local_addresses = {});
 
   /// `Host` header of a request to `port` (the HTTP or the WebSocket port): "127.0.0.1:8080",
   /// "localhost.:8080" (trailing dot allowed), "[::1]:8080"; names compare without case.
@@ -40,6 +43,7 @@ class HostPolicy {
   int http_port_;
   int ws_port_;
   bool wildcard_;
+  std::vector<std::string> local_names_;  // as they appear in a Host header ("[v6]")
 };
 
 /// True for 127.0.0.0/8, ::1 and IPv4-mapped loopback (::ffff:127.x.y.z).

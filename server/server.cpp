@@ -1,17 +1,24 @@
 #include "server/server.hpp"
 
+#include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <thread>
 
 #include "io/bundled_characters.hpp"
+#include "server/http_gate.hpp"
 #include "server/http_routes.hpp"  // includes httplib.h after Eigen
 #include "server/security.hpp"
+#include "server/session_store.hpp"
 #include "server/uploads.hpp"
 #include "server/ws_endpoint.hpp"
 
@@ -23,15 +30,64 @@ std::string default_web_root() {
   return PINDRAG_DEFAULT_WEB_ROOT;
 }
 
+std::vector<std::string> listen_addresses(const std::string& host) {
+  if (!is_wildcard_address(host)) return {host};
+  const bool both = host != "0.0.0.0";  // an IPv6 wildcard takes IPv4 too (dual stack)
+  std::vector<std::string> out;
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return out;
+  for (const ifaddrs* i = list; i; i = i->ifa_next) {
+    if (!i->ifa_addr) continue;
+    char text[INET6_ADDRSTRLEN] = {};
+    const int family = i->ifa_addr->sa_family;
+    if (family == AF_INET) {
+      ::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, text,
+                  sizeof text);
+    } else if (family == AF_INET6 && both) {
+      ::inet_ntop(AF_INET6, &reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr, text,
+                  sizeof text);
+    }
+    if (*text && std::find(out.begin(), out.end(), text) == out.end()) out.emplace_back(text);
+  }
+  ::freeifaddrs(list);
+  return out;
+}
+
+namespace {
+
+// The key for creating sessions on a server reachable from other machines: the one kept in the
+// data directory, else a new one (kept there when there is a data directory).
+std::string load_or_make_server_key(const std::string& data_dir) {
+  const fs::path path = data_dir.empty() ? fs::path() : fs::path(data_dir) / "server.key";
+  if (!path.empty()) {
+    std::ifstream in(path);
+    std::string key;
+    if (in >> key && is_valid_id(key)) return key;
+  }
+  const std::string key = random_hex(16);
+  if (!path.empty()) {
+    fs::create_directories(path.parent_path());
+    write_private_file(path.string(), key);
+  }
+  return key;
+}
+
+}  // namespace
+
 struct Server::Impl {
   explicit Impl(const ServerOptions& o)
-      : options(o), registry(o.data_dir), policy(o.host, 0, 0), ws(registry, policy) {}
+      : options(o),
+        registry(RegistryOptions{
+            .data_dir = o.data_dir, .max_live = o.max_live_sessions, .expire_days = o.expire_days}),
+        policy(o.host, 0, 0),
+        http(GateLimits{.header_timeout = o.header_timeout}),
+        ws(registry, policy, o.header_timeout) {}
 
   ServerOptions options;
   SessionRegistry registry;
   HostPolicy policy;
   RouteContext routes;
-  httplib::Server http;
+  GatedHttpServer http;
   WsEndpoint ws;
   std::thread http_thread;
   int http_port = 0;
@@ -45,6 +101,9 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
   Impl& s = *impl_;
   s.routes.registry = &s.registry;
   s.routes.policy = &s.policy;
+  s.routes.call_timeout = options.call_timeout;
+  if (!is_loopback_host(options.host))
+    s.routes.server_key = load_or_make_server_key(options.data_dir);
   s.routes.web_root = options.web_root.empty() ? default_web_root() : options.web_root;
   if (!fs::is_regular_file(fs::path(s.routes.web_root) / "index.html")) {
     throw std::runtime_error("web root " + s.routes.web_root +
@@ -75,7 +134,6 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
     int yes = 1;
     ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
-  s.http.new_task_queue = [] { return new httplib::ThreadPool(8); };
   const std::string bind_host = options.host == "localhost" ? "127.0.0.1" : options.host;
   if (options.port == 0) {
     s.http_port = s.http.bind_to_any_port(bind_host);
@@ -88,6 +146,7 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
     }
     s.http_port = options.port;
   }
+  s.http.widen_listen_backlog();
   const int ws_request =
       options.ws_port >= 0 ? options.ws_port : (options.port == 0 ? 0 : options.port + 1);
   try {
@@ -96,7 +155,7 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
     throw std::runtime_error("cannot listen on " + options.host + ":" + std::to_string(ws_request) +
                              " (WebSocket): " + e.what());
   }
-  s.policy = HostPolicy(options.host, s.http_port, s.ws_port);
+  s.policy = HostPolicy(options.host, s.http_port, s.ws_port, listen_addresses(bind_host));
   register_routes(s.http, s.routes);
 }
 
@@ -119,6 +178,7 @@ void Server::stop() {
   s.stopped = true;
   s.http.stop();
   if (s.http_thread.joinable()) s.http_thread.join();
+  s.http.shut_down();
   s.ws.stop();
   s.registry.stop_all();
 }
@@ -129,15 +189,19 @@ int Server::restored_sessions() const { return impl_->restored; }
 SessionRegistry& Server::registry() { return impl_->registry; }
 std::size_t Server::ws_connections() const { return impl_->ws.connections(); }
 
+const std::string& Server::server_key() const { return impl_->routes.server_key; }
+
 std::string Server::url() const {
-  std::string url = impl_->policy.page_origin() + "/";
+  std::string query;
   const std::string& name = impl_->routes.served_character_name;
   if (!name.empty()) {
-    url += "?character=" + name;
+    query = "character=" + name;
   } else if (impl_->options.character != "human48") {
-    url += "?character=" + impl_->options.character;
+    query = "character=" + impl_->options.character;
   }
-  return url;
+  if (!server_key().empty())
+    query += (query.empty() ? "" : "&") + std::string("key=") + server_key();
+  return impl_->policy.page_origin() + "/" + (query.empty() ? "" : "?" + query);
 }
 
 }  // namespace server

@@ -1,12 +1,15 @@
 // The pindrag server: HTTP (cpp-httplib) on port P and the WebSocket (Boost.Beast) on P+1 over
 // one session registry. Binding happens in the constructor, so a port in use is reported at once;
 // start() runs both on their own threads; stop() shuts both down and stops every session actor
-// (each saves its last state). DESIGN.md §6, docs/protocol.md.
+// (each saves its last state). DESIGN.md §6, docs/protocol.md. HTTP requests wait for a session
+// at most call_timeout (then 503); headers arrive within header_timeout or the connection closes.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/session_registry.hpp"
 
@@ -20,10 +23,19 @@ struct ServerOptions {
   std::string character = "human48";
   std::string data_dir;  // empty: sessions are kept in memory only
   std::string web_root;  // empty: default_web_root()
+  std::size_t max_live_sessions = RegistryOptions::kDefaultMaxLive;  // in memory at once
+  int expire_days = 0;  // > 0: sessions untouched for that many days are deleted
+  /// How long an HTTP request waits for its session's actor before answering 503.
+  std::chrono::milliseconds call_timeout{10000};
+  /// How long a connection may take to send a request header (HTTP) or upgrade (WebSocket).
+  std::chrono::milliseconds header_timeout{5000};
 };
 
 /// The page's folder: $PINDRAG_WEB_ROOT, else the source tree's web/ recorded at build time.
 std::string default_web_root();
+/// The addresses a server listening on `host` is reached at: `host` itself, or for a wildcard
+/// (0.0.0.0: IPv4, ::: both families) the addresses of the machine's interfaces.
+std::vector<std::string> listen_addresses(const std::string& host);
 
 class Server {
  public:
@@ -40,8 +52,12 @@ class Server {
 
   int http_port() const;
   int ws_port() const;
-  /// The page's URL, with ?character=NAME when the character is not the page's default.
+  /// The page's URL, with ?character=NAME when the character is not the page's default and
+  /// ?key=K when creating sessions needs the server key.
   std::string url() const;
+  /// The key that creating and listing sessions needs when the server listens beyond loopback
+  /// ("" on loopback): kept in <data-dir>/server.key (0600), so bookmarks survive a restart.
+  const std::string& server_key() const;
   /// How many saved sessions were restored at startup.
   int restored_sessions() const;
   SessionRegistry& registry();

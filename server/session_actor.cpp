@@ -216,6 +216,21 @@ void SessionActor::process(Item& item) {
     case Item::Kind::kUnsubscribe:
       subscribers_.erase(item.connection);
       last_seq_.erase(item.connection);
+      if (drag_owner_ == item.connection) {
+        // the client left mid-gesture: end its drag as a drag_end would (one undo entry)
+        drag_owner_.reset();
+        if (session_->dragging()) {
+          std::optional<animator::Session::Checkpoint> checkpoint;
+          if (journal_) checkpoint = session_->checkpoint();
+          session_->drag_end();
+          try {
+            if (checkpoint) save_edit(json{{"type", "drag_end"}}, std::move(*checkpoint));
+          } catch (const animator::SessionWriteError&) {
+            // taken back; nobody is left to tell but the log (save_edit wrote it)
+          }
+          after_edit();
+        }
+      }
       break;
     case Item::Kind::kCall: {
       const bool edit = item.edit;
@@ -250,6 +265,7 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
     try {
       save_edit(to_json(request.message), std::move(*checkpoint));
     } catch (const animator::SessionWriteError& e) {
+      drag_owner_.reset();  // taking the edit back ended any drag
       send_to(
           connection,
           error_message(request.id, std::string(message_type(request.message)) + ": " + e.what(),
@@ -258,6 +274,8 @@ void SessionActor::apply_request(std::uint64_t connection, const ClientRequest& 
       return;
     }
   }
+  if (std::holds_alternative<DragBegin>(request.message)) drag_owner_ = connection;
+  if (std::holds_alternative<DragEnd>(request.message)) drag_owner_.reset();
   if (!request.id.is_null())
     send_to(connection, ack_message(request.id, message_type(request.message)));
   // a drag shows in the pose frames; anything else may change what `state` carries

@@ -6,6 +6,7 @@
 // A sample is flushed into the ordered queue when a command arrives after it, so a drag_end never
 // overtakes the drag_moves before it. The solver ticks only while Session::needs_tick() says
 // something moves, at most every kMinTickInterval, and immediately after a new drag sample.
+// A drag ends when the connection that began it unsubscribes (a client that vanished mid-drag).
 //
 // Durability (server/session_journal.hpp): an edit is acknowledged only once its journal record
 // is on disk. When the record cannot be written (disk full, a file size limit), the edit is taken
@@ -16,6 +17,7 @@
 // rest; snapshots are written off the actor thread.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -26,6 +28,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -36,6 +39,12 @@
 #include "server/session_journal.hpp"
 
 namespace server {
+
+/// A call_within() that did not complete within its timeout (HTTP: 503 with Retry-After).
+class ActorBusy : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 /// A WebSocket connection as the actor sees it. Called on the actor thread; must not block.
 class SessionSubscriber {
@@ -121,6 +130,72 @@ class SessionActor {
     return future.get();
   }
 
+  /// Callers of call_within() that may wait at once; more are refused at once, so one busy
+  /// session holds at most this many HTTP threads.
+  static constexpr int kMaxWaitingCallers = 4;
+
+  /// call() for callers that must not wait long (HTTP handlers): returns `f`'s result if it
+  /// completes within `timeout`. A call still queued when the timeout passes is withdrawn and
+  /// never runs; one already running completes on the actor and its result is dropped.
+  /// `f` must own what it uses (capture by value): it may run after this function returned.
+  /// `edit`: as for call(), the change is saved before the result is returned.
+  /// @throws ActorBusy when the timeout passes first, or kMaxWaitingCallers already wait;
+  ///         animator::SessionWriteError when an edit cannot be saved (it is taken back then)
+  template <class F>
+  auto call_within(std::chrono::milliseconds timeout, F f, bool edit = false)
+      -> decltype(f(std::declval<animator::Session&>())) {
+    using R = decltype(f(std::declval<animator::Session&>()));
+    if (++waiting_callers_ > kMaxWaitingCallers) {
+      --waiting_callers_;
+      throw ActorBusy("session " + id_ + ": " + std::to_string(kMaxWaitingCallers) +
+                      " requests wait for it already; this one was not run (retry later)");
+    }
+    struct Leave {
+      std::atomic<int>& waiting;
+      ~Leave() { --waiting; }
+    } leave{waiting_callers_};
+    struct Pending {
+      std::promise<R> promise;
+      std::atomic<int> stage{0};  // 0 queued, 1 running, 2 withdrawn by the caller
+    };
+    auto pending = std::make_shared<Pending>();
+    auto future = pending->promise.get_future();
+    const bool accepted = enqueue_call(
+        [pending, f = std::move(f)](animator::Session& s,
+                                    const std::function<void()>& save) mutable {
+          int queued = 0;
+          if (!pending->stage.compare_exchange_strong(queued, 1)) return;  // the caller left
+          try {
+            if constexpr (std::is_void_v<R>) {
+              f(s);
+              save();
+              pending->promise.set_value();
+            } else {
+              R result = f(s);
+              save();
+              pending->promise.set_value(std::move(result));
+            }
+          } catch (...) {
+            pending->promise.set_exception(std::current_exception());
+          }
+        },
+        edit);
+    if (!accepted) throw animator::SessionError("session " + id_ + ": the server is shutting down");
+    if (future.wait_for(timeout) != std::future_status::ready) {
+      int queued = 0;
+      const std::string waited = std::to_string(timeout.count()) + " ms";
+      if (pending->stage.compare_exchange_strong(queued, 2)) {
+        throw ActorBusy("session " + id_ + ": busy with earlier work for " + waited +
+                        "; this request was not run (retry later)");
+      }
+      if (future.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+        throw ActorBusy("session " + id_ + ": this request is still running after " + waited +
+                        " and completes in the background (retry later for its result)");
+      }
+    }
+    return future.get();
+  }
+
   ActorStats stats() const;
   /// Stops the thread after the commands already posted (saving if needed). Idempotent.
   void stop();
@@ -165,6 +240,7 @@ class SessionActor {
   // shared with posting threads
   mutable std::mutex mutex_;
   std::condition_variable wake_;
+  std::atomic<int> waiting_callers_{0};  // in call_within()
   std::deque<Item> queue_;
   std::optional<DragSample> mailbox_;
   bool stopping_ = false;
@@ -173,6 +249,7 @@ class SessionActor {
   // actor thread only
   std::map<std::uint64_t, std::shared_ptr<SessionSubscriber>> subscribers_;
   std::map<std::uint64_t, std::uint32_t> last_seq_;
+  std::optional<std::uint64_t> drag_owner_;  // the connection whose drag_begin is active
   std::uint32_t frame_id_ = 0;
   std::chrono::steady_clock::time_point last_tick_{};
   std::chrono::steady_clock::time_point last_report_{};

@@ -5,6 +5,7 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -58,16 +59,21 @@ bool parse_target(std::string_view target, std::string& session, std::string& to
 class Connection;
 
 struct WsEndpoint::Impl {
-  Impl(SessionRegistry& r, const HostPolicy& p) : registry(r), policy(p), acceptor(ioc) {}
+  Impl(SessionRegistry& r, const HostPolicy& p, std::chrono::milliseconds handshake)
+      : registry(r), policy(p), handshake_timeout(handshake), acceptor(ioc), backoff(ioc) {}
   void accept();
+  void on_accept_failed(const beast::error_code& ec);
 
   SessionRegistry& registry;
   const HostPolicy& policy;
+  const std::chrono::milliseconds handshake_timeout;
+  bool accept_failing = false;  // I/O thread only: a failure was reported and not yet recovered
   // declared before the io_context: connections still queued in it count down when it goes
   std::atomic<std::size_t> open_connections{0};
   bool stopped = false;
   asio::io_context ioc;
   tcp::acceptor acceptor;
+  asio::steady_timer backoff;
   std::thread thread;
 };
 
@@ -84,7 +90,7 @@ class Connection : public std::enable_shared_from_this<Connection> {
   }
 
   void start() {
-    beast::get_lowest_layer(ws_).expires_after(std::chrono::seconds(10));
+    beast::get_lowest_layer(ws_).expires_after(endpoint_.handshake_timeout);
     parser_.emplace();
     parser_->header_limit(8 * 1024);
     parser_->body_limit(4 * 1024);
@@ -175,14 +181,24 @@ class Connection : public std::enable_shared_from_this<Connection> {
       return refuse(http::status::not_found, "path: the WebSocket is at /ws");
     }
     if (!is_valid_id(session)) return refuse(http::status::not_found, "session: no such session");
-    const SessionLookup found = endpoint_.registry.find(session, token);
+    SessionLookup found;
+    try {
+      found = endpoint_.registry.find(session, token);
+    } catch (const std::exception& e) {
+      // every live session is in use, or the saved session does not load
+      return refuse(http::status::service_unavailable, std::string("session: ") + e.what());
+    }
     if (found.status == 404) return refuse(http::status::not_found, "session: no such session");
     if (found.status != 200)
       return refuse(http::status::unauthorized, "token: missing or wrong session token");
     actor_ = found.actor;
 
     beast::get_lowest_layer(ws_).expires_never();
-    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    websocket::stream_base::timeout timeouts{};
+    timeouts.handshake_timeout = endpoint_.handshake_timeout;
+    timeouts.idle_timeout = WsEndpoint::kIdleTimeout;
+    timeouts.keep_alive_pings = true;
+    ws_.set_option(timeouts);
     ws_.read_message_max(kMaxWsMessageBytes);
     ws_.auto_fragment(false);
     ws_.async_accept(req, [self = shared_from_this()](beast::error_code accept_ec) {
@@ -293,24 +309,42 @@ class Connection : public std::enable_shared_from_this<Connection> {
   bool writing_ = false;
 };
 
+void WsEndpoint::Impl::on_accept_failed(const beast::error_code& ec) {
+  // out of descriptors (EMFILE, ENFILE) or another transient failure: the pending connection
+  // stays in the backlog, so accepting again at once would fail again at once
+  if (!accept_failing) {
+    std::cerr << "pindrag serve: WebSocket accept failed (" << ec.message() << "); retrying every "
+              << kAcceptBackoff.count() << " ms until it succeeds\n";
+    accept_failing = true;
+  }
+  backoff.expires_after(kAcceptBackoff);
+  backoff.async_wait([this](beast::error_code wait_ec) {
+    if (!wait_ec && acceptor.is_open()) accept();
+  });
+}
+
 void WsEndpoint::Impl::accept() {
   acceptor.async_accept(asio::make_strand(ioc), [this](beast::error_code ec, tcp::socket socket) {
     if (ec) {
       if (ec == asio::error::operation_aborted || !acceptor.is_open()) return;
-    } else {
-      // small frames go out at once (no Nagle delay), and the kernel holds little unsent data, so
-      // the pending-pose slot, not a socket buffer, absorbs a slow reader
-      beast::error_code ignored;
-      socket.set_option(tcp::no_delay(true), ignored);
-      socket.set_option(asio::socket_base::send_buffer_size(64 * 1024), ignored);
-      std::make_shared<Connection>(std::move(socket), *this)->start();
+      return on_accept_failed(ec);
     }
+    if (accept_failing) std::cerr << "pindrag serve: WebSocket accepting again\n";
+    accept_failing = false;
+    // small frames go out at once (no Nagle delay), and the kernel holds little unsent data, so
+    // the pending-pose slot, not a socket buffer, absorbs a slow reader
+    beast::error_code ignored;
+    socket.set_option(tcp::no_delay(true), ignored);
+    socket.set_option(asio::socket_base::send_buffer_size(64 * 1024), ignored);
+    std::make_shared<Connection>(std::move(socket), *this)->start();
     accept();
   });
 }
 
-WsEndpoint::WsEndpoint(SessionRegistry& registry, const HostPolicy& policy)
-    : impl_(std::make_unique<Impl>(registry, policy)) {}
+WsEndpoint::WsEndpoint(SessionRegistry& registry,
+                       const HostPolicy& policy,
+                       std::chrono::milliseconds handshake_timeout)
+    : impl_(std::make_unique<Impl>(registry, policy, handshake_timeout)) {}
 
 WsEndpoint::~WsEndpoint() { stop(); }
 
@@ -336,6 +370,7 @@ void WsEndpoint::stop() {
   asio::post(impl_->ioc, [this] {
     beast::error_code ignored;
     impl_->acceptor.close(ignored);
+    impl_->backoff.cancel();
   });
   impl_->ioc.stop();
   if (impl_->thread.joinable()) impl_->thread.join();

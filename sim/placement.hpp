@@ -23,4 +23,14 @@ Eigen::VectorXd place_on_ground(const core::Model& model,
                                 const GroundPlane& ground,
                                 double depth = 0);
 
+/// A configuration that stands on the ground: every box-shaped link whose lowest point is within
+/// `reach` of the lowest collision point (feet, toes) turned so that its face nearest the ground
+/// lies flat on it — spherical joints take the exact turn, revolute joints the turn about their
+/// axis that comes closest, within their limits — then placed on the ground (place_on_ground).
+/// Links are levelled parents first, so a toe follows its foot.
+Eigen::VectorXd standing_configuration(const core::Model& model,
+                                       const Eigen::VectorXd& q,
+                                       const GroundPlane& ground,
+                                       double reach = 0.05);
+
 }  // namespace sim

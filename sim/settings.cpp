@@ -17,6 +17,18 @@ const char* to_string(Integrator i) {
   return "";
 }
 
+ContactSettings figure_contact_settings(double mass) {
+  constexpr double g = 9.81;
+  ContactSettings c;
+  c.kp = 1e6;
+  c.kd = 2 * 0.7 * std::sqrt(c.kp * mass / 4);
+  c.mu_static = 0.8;
+  c.mu_dynamic = 0.6;
+  c.kfp = c.mu_static * mass * g / 2 / 0.005;
+  c.kfd = 0.005 * c.kfp;
+  return c;
+}
+
 std::string validate(const WorldSettings& s) {
   if (!std::isfinite(s.step) || s.step <= 0 || s.step > 0.1) {
     return "step: must be a finite number in (0, 0.1] s";

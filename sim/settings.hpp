@@ -36,4 +36,14 @@ struct WorldSettings {
 /// Empty when usable, else a message naming the first bad field ("contact.kp: must be ...").
 std::string validate(const WorldSettings& s);
 
+/// Contact for a figure of `mass` kg standing on its feet (two feet, each a foot and a toe pair):
+/// k_P = 1e6 (a stiff sole: at 1e5 a figure whose centre of mass is a few cm in front of its heels
+/// tilts back onto them and topples, since each pair carries the same stiffness however small),
+/// k_D for a damping ratio of 0.7 with a quarter of the weight on each pair, μS 0.8 and μD 0.6
+/// (rubber on wood), the static-friction anchor stretched 5 mm under μS m g / 2, and k_FD small
+/// enough for the explicit contact forces of dynamics-backed pins: h k_FD / m_eff < 1 at 1 ms
+/// for the few kilograms a foot weighs once the body above can rotate (Yamane §6.3.6 leaves
+/// k_FP and k_FD to the model).
+ContactSettings figure_contact_settings(double mass);
+
 }  // namespace sim

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,6 +29,8 @@
 #include "core/data.hpp"
 #include "core/model.hpp"
 #include "core/osim.hpp"
+#include "ik/acceleration_solver.hpp"
+#include "ik/problem.hpp"
 #include "sim/collision.hpp"
 #include "sim/contact_dynamics.hpp"
 #include "sim/environment.hpp"
@@ -78,6 +81,19 @@ class World {
   int body_index(const std::string& name) const;
   void set_state(int i, const Eigen::VectorXd& q, const Eigen::VectorXd& v);
   void set_joint_forces(int i, const Eigen::VectorXd& tau);
+
+  // --- dynamics-backed pins (the dynamic_pins effect, sim/world_pins.cpp) -----------------
+  /// The drag, pins and joint references of body i, solved at acceleration level while the
+  /// scene has dynamic_pins (ik/acceleration_solver.hpp): the body's joints move as the tasks
+  /// ask, its root as the contact forces and gravity make it. Needs a free root.
+  /// @throws SimError when the body's root is not a free joint
+  void set_pin_problem(int i, const ik::Problem& problem);
+  void clear_pin_problem(int i);
+  /// The problem of body i, to move its targets between steps; nullptr when it has none.
+  ik::Problem* pin_problem(int i);
+  void set_pin_settings(const ik::AccelerationSettings& settings);
+  /// The solver of body i after its last dynamic-pins step (torques, report); nullptr when none.
+  const ik::AccelerationSolver* pin_solver(int i) const;
 
   // --- what is simulated ------------------------------------------------------------------
   void set_scene(const Scene& scene);
@@ -130,7 +146,18 @@ class World {
     core::OsimWorkspace osim;
     Eigen::MatrixXd Phi;
     bool mass_matrix_ready = false;
+    // dynamics-backed pins: the tasks, the solver (a fresh workspace in every copy) and the
+    // contact forces as joint forces Q = Σ J_kᵀ f_k
+    std::optional<ik::Problem> pins;
+    std::shared_ptr<ik::AccelerationSolver> pin_solver;
+    Eigen::VectorXd contact_force;
+    core::FrameJacobian handle_jacobian;
+    bool pinned = false;  // its accelerations came from the pins this step
     explicit Work(const core::Model& m) : data(m) {}
+    Work(const Work& o);
+    Work& operator=(const Work& o);
+    Work(Work&&) = default;
+    Work& operator=(Work&&) = default;
   };
   struct Anchor {
     FeatureKey key;
@@ -145,6 +172,9 @@ class World {
   void run_collision_search();
   void run_contact_forces();
   void run_implicit_contact();
+  bool dynamically_pinned(int b) const;
+  void run_dynamic_pins();
+  void contact_joint_forces(int b);
   void run_forward_dynamics();
   void run_limit_projection();
   void run_integration();
@@ -173,6 +203,9 @@ class World {
   std::vector<Trial> trials_;
   std::vector<Anchor> anchors_, next_anchors_;
   ImplicitWorkspace implicit_;
+  std::vector<ContactPair> implicit_pairs_;  // the pairs solved implicitly (no pinned body)
+  std::vector<int> implicit_index_;          // their indices in pairs_
+  ik::AccelerationSettings pin_settings_;
   Eigen::MatrixXd Phi_;
   Eigen::VectorXd free_acceleration_;
   // hard limits: rows, H⁻¹ columns and impulses

@@ -114,20 +114,35 @@ void World::compute_mass_matrix(int b) {
 }
 
 void World::run_implicit_contact() {
-  // the handles of every pair, on the bodies they touch: the link (+) and a partner link (−)
+  // pairs that touch a body moved by its dynamics-backed pins keep their explicit wrench (Yamane
+  // ch. 9 uses the contact forces of the step's start); the others are solved implicitly
+  implicit_index_.clear();
+  for (int i = 0; i < static_cast<int>(pairs_.size()); ++i) {
+    ContactPair& p = pairs_[i];
+    const bool pinned =
+        dynamically_pinned(p.body) || (p.partner_body >= 0 && dynamically_pinned(p.partner_body));
+    if (pinned) {
+      p.wrench = p.wrench0;
+    } else {
+      implicit_index_.push_back(i);
+    }
+  }
+  if (implicit_index_.empty()) return;
+  // the handles of every implicit pair, on the bodies they touch: the link (+), a partner (−)
   for (Work& w : work_) {
     w.handles.clear();
     w.handle_pair.clear();
     w.handle_sign.clear();
     w.handle_jdot_v.clear();
   }
-  for (int i = 0; i < static_cast<int>(pairs_.size()); ++i) {
-    const ContactPair& p = pairs_[i];
+  const int np = static_cast<int>(implicit_index_.size());
+  for (int slot = 0; slot < np; ++slot) {
+    const ContactPair& p = pairs_[implicit_index_[slot]];
     auto add = [&](int body, int link, double sign) {
       Work& w = work_[body];
       const Vector3 p_Link = w.data.X_W[link].inverse_apply(p.ref_W);
       w.handles.push_back({link, p_Link, true});
-      w.handle_pair.push_back(i);
+      w.handle_pair.push_back(slot);
       w.handle_sign.push_back(sign);
       const core::PointMotion jdv = core::point_jdot_v(*w.dynamics, w.data, link, p_Link);
       Vector6 a;
@@ -137,9 +152,8 @@ void World::run_implicit_contact() {
     add(p.body, p.link, 1.0);
     if (p.partner_body >= 0) add(p.partner_body, p.partner_link, -1.0);
   }
-  const int m = 6 * static_cast<int>(pairs_.size());
-  Phi_.setZero(m, m);
-  free_acceleration_.setZero(m);
+  Phi_.setZero(6 * np, 6 * np);
+  free_acceleration_.setZero(6 * np);
   counters_.count(Stage::kOperationalSpace);
   for (int b = 0; b < body_count(); ++b) {
     Work& w = work_[b];
@@ -152,17 +166,22 @@ void World::run_implicit_contact() {
     core::solve_mass_matrix(*w.dynamics, w.data, w.scratch);
     const int nh = static_cast<int>(w.handles.size());
     for (int h = 0; h < nh; ++h) {
-      const int pi = w.handle_pair[h];
+      const int slot = w.handle_pair[h];
       const double sh = w.handle_sign[h];
-      free_acceleration_.segment<6>(6 * pi) +=
+      free_acceleration_.segment<6>(6 * slot) +=
           sh * (w.osim.J.middleRows<6>(6 * h) * w.scratch + w.handle_jdot_v[h]);
       for (int g = 0; g < nh; ++g) {
-        Phi_.block<6, 6>(6 * pi, 6 * w.handle_pair[g]) +=
+        Phi_.block<6, 6>(6 * slot, 6 * w.handle_pair[g]) +=
             (sh * w.handle_sign[g]) * w.Phi.block<6, 6>(6 * h, 6 * g);
       }
     }
   }
-  solve_implicit_wrenches(pairs_, Phi_, free_acceleration_, settings_.step, implicit_);
+  implicit_pairs_.resize(np);
+  for (int slot = 0; slot < np; ++slot) implicit_pairs_[slot] = pairs_[implicit_index_[slot]];
+  solve_implicit_wrenches(implicit_pairs_, Phi_, free_acceleration_, settings_.step, implicit_);
+  for (int slot = 0; slot < np; ++slot) {
+    pairs_[implicit_index_[slot]].wrench = implicit_pairs_[slot].wrench;
+  }
 }
 
 void World::run_forward_dynamics() {
@@ -171,12 +190,13 @@ void World::run_forward_dynamics() {
   for (int b = 0; b < body_count(); ++b) {
     Work& w = work_[b];
     const Body& body = bodies_[b];
+    if (w.pinned) continue;  // its accelerations came from its pins (run_dynamic_pins)
     if (w.mass_matrix_ready && !w.handles.empty()) {
       // a = H⁻¹ (τ − b + Σ ±Jᵀ τ̂), with H factorized for the contact solve
       w.generalized = body.tau - w.bias;
       for (int k = 0; k < static_cast<int>(w.handles.size()); ++k) {
         w.generalized.noalias() += w.handle_sign[k] * w.osim.J.middleRows<6>(6 * k).transpose() *
-                                   pairs_[w.handle_pair[k]].wrench;
+                                   implicit_pairs_[w.handle_pair[k]].wrench;
       }
       core::solve_mass_matrix(*w.dynamics, w.data, w.generalized);
       w.acceleration = w.generalized;

@@ -9,16 +9,20 @@
 namespace sim {
 
 void World::step_euler() {
-  for (Work& w : work_) {
+  bool pins = false;
+  for (int b = 0; b < body_count(); ++b) {
+    Work& w = work_[b];
     w.mass_matrix_ready = false;
     w.handles.clear();
+    w.pinned = false;
+    pins = pins || dynamically_pinned(b);
   }
   points_.clear();
   pairs_.clear();
   point_forces_.clear();
   next_anchors_.clear();
+  if (scene_.contacts() || pins) run_kinematics();
   if (scene_.contacts()) {
-    run_kinematics();
     run_collision_search();
     if (!points_.empty()) {
       run_contact_forces();
@@ -29,6 +33,7 @@ void World::step_euler() {
       }
     }
   }
+  if (pins) run_dynamic_pins();
   run_forward_dynamics();
   if (scene_.hard_limits) run_limit_projection();
   run_integration();

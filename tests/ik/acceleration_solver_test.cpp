@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "core/aba.hpp"
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
@@ -94,6 +96,31 @@ TEST(AccelerationSolver, ForwardDynamicsWithTheTorquesReproducesTheAccelerations
   core::Data fd(*s.model);
   const Eigen::VectorXd a = core::aba(*s.model, fd, s.q, s.v, solver.torque(), s.f_ext);
   EXPECT_LT((a - solver.acceleration()).norm(), 1e-9 * (1 + a.norm()));
+}
+
+// A drag the joints cannot follow (a stiff gain on a far target) is cut to the bounds of the
+// settings; the root rows still hold, so the cut costs the drag, never the physics.
+TEST(AccelerationSolver, JointAccelerationsAndSpeedsStayWithinTheirBounds) {
+  Scene s(true);
+  s.problem.get<ik::LinkTask>(s.drag)->gain = 400;  // ω: 1.6e5 × 0.06 m ≈ 1e4 m/s² asked
+  ik::AccelerationSettings settings;
+  settings.max_joint_acceleration = 150;
+  settings.max_joint_speed = 3;
+  ik::AccelerationSolver solver(*s.model, settings);
+  const ik::AccelerationReport& r = solver.solve(s.problem, s.data, s.q, s.v, s.bias, s.contact);
+  ASSERT_EQ(r.status, ik::AccelerationReport::Status::kOk) << r.message;
+  EXPECT_TRUE(r.bounded);
+  const Eigen::VectorXd qdd = solver.acceleration().tail(s.model->nv - 6);
+  EXPECT_LE(qdd.cwiseAbs().maxCoeff(), 150 + 1e-9);
+  const Eigen::VectorXd v_next = s.v.tail(s.model->nv - 6) + settings.step * qdd;
+  EXPECT_LE(v_next.cwiseAbs().maxCoeff(),
+            std::max(3.0, s.v.tail(s.model->nv - 6).cwiseAbs().maxCoeff()) + 1e-9);
+  EXPECT_LT(r.root_residual, 1e-9);
+  // the same problem at its default gain is within the bounds and left alone
+  s.problem.get<ik::LinkTask>(s.drag)->gain = ik::kDefaultGain;
+  EXPECT_FALSE(ik::AccelerationSolver(*s.model)
+                   .solve(s.problem, s.data, s.q, s.v, s.bias, s.contact)
+                   .bounded);
 }
 
 TEST(AccelerationSolver, TheDraggedPointAcceleratesAsCommanded) {

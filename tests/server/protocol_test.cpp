@@ -173,8 +173,8 @@ TEST(Protocol, MalformedFieldsAreRefusedNamingTypeAndField) {
       {R"({"type": "set_settings", "settings": 3})",
        "set_settings.settings: expected an object, got number"},
       {R"({"type": "set_effects", "scene": {"wind": true}})",
-       "set_effects.scene.wind: unknown key (rule: one of gravity, ground_contact, dynamic_pins, "
-       "hard_limits, self_collision)"},
+       "set_effects.scene.wind: unknown key (rule: one of gravity, ground_contact, friction, "
+       "hard_limits, self_collision, dynamic_pins)"},
       {R"({"type": "set_effects", "scene": {"gravity": 1}})",
        "set_effects.scene.gravity: expected true or false, got number"},
       {R"({"type": "key_insert", "time": -1})",

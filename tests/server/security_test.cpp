@@ -27,19 +27,27 @@ TEST(HostPolicy, LoopbackNamesWithTheRightPortAreAllowed) {
   }
 }
 
-TEST(HostPolicy, AListenHostAddsItsNameAndAWildcardAnyIpLiteral) {
+TEST(HostPolicy, AListenHostAddsItsNameAndAWildcardTheAddressesItListensOn) {
   const HostPolicy lan("192.168.1.5", 8080, 8081);
   EXPECT_TRUE(lan.host_allowed("192.168.1.5:8080", 8080));
   EXPECT_FALSE(lan.host_allowed("192.168.1.6:8080", 8080));
   EXPECT_EQ(lan.page_origin(), "http://192.168.1.5:8080");
 
-  const HostPolicy any("0.0.0.0", 8080, 8081);
+  const HostPolicy any("0.0.0.0", 8080, 8081, {"10.1.2.3", "FE80::1"});
   EXPECT_TRUE(any.host_allowed("10.1.2.3:8080", 8080));
   EXPECT_TRUE(any.host_allowed("[fe80::1]:8080", 8080));
-  // DNS rebinding needs a name: names other than localhost stay refused
-  EXPECT_FALSE(any.host_allowed("evil.example:8080", 8080));
-  EXPECT_FALSE(any.host_allowed("10.1.2:8080", 8080));
+  EXPECT_TRUE(any.host_allowed("127.0.0.1:8080", 8080));
+  EXPECT_TRUE(any.origin_allowed("http://10.1.2.3:8080"));
+  // an IP literal the server does not listen on is as foreign as a name
+  for (const char* host : {"10.1.2.4:8080", "203.0.113.7:8080", "[fe80::2]:8080",
+                           "evil.example:8080", "10.1.2:8080", "0.0.0.0:8080"}) {
+    EXPECT_FALSE(any.host_allowed(host, 8080)) << host;
+  }
+  EXPECT_FALSE(any.origin_allowed("http://203.0.113.7:8080"));
   EXPECT_EQ(any.page_origin(), "http://127.0.0.1:8080");
+  // the addresses count only for a wildcard bind
+  const HostPolicy loopback("127.0.0.1", 8080, 8081, {"10.1.2.3"});
+  EXPECT_FALSE(loopback.host_allowed("10.1.2.3:8080", 8080));
 
   const HostPolicy v6("::1", 8080, 8081);
   EXPECT_TRUE(v6.host_allowed("[::1]:8080", 8080));

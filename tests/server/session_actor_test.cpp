@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <cstring>
 #include <filesystem>
@@ -250,6 +251,97 @@ TEST_F(SessionActorTest, CallReturnsResultsRethrowsAndSavesEdits) {
   } catch (const animator::SessionError& e) {
     EXPECT_NE(std::string(e.what()).find("shutting down"), std::string::npos) << e.what();
   }
+}
+
+TEST_F(SessionActorTest, CallWithinGivesUpOnABusyActorAndAWithdrawnCallNeverRuns) {
+  const auto release = block_actor();
+  auto ran = std::make_shared<std::atomic<int>>(0);
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    actor_->call_within(
+        std::chrono::milliseconds(100),
+        [ran](animator::Session& s) {
+          ++*ran;
+          return s.key_insert(0.5);
+        },
+        /*edit=*/true);
+    ADD_FAILURE() << "call_within waited for a busy actor";
+  } catch (const server::ActorBusy& e) {
+    EXPECT_NE(std::string(e.what()).find("not run"), std::string::npos) << e.what();
+  }
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GE(waited, 0.09);
+  EXPECT_LT(waited, 1.0);
+  release();
+  // the withdrawn call was skipped: no key, and the actor goes on
+  EXPECT_EQ(actor_->call([](animator::Session& s) { return s.keys().keys().size(); }), 0u);
+  EXPECT_EQ(ran->load(), 0);
+  EXPECT_EQ(actor_->call_within(std::chrono::seconds(5),
+                                [](animator::Session& s) { return s.character(); }),
+            "human48");
+}
+
+TEST_F(SessionActorTest, CallWithinRefusesAtOnceWhenEnoughCallersWaitAlready) {
+  const auto release = block_actor();
+  std::vector<std::thread> waiting;
+  std::atomic<int> busy{0};
+  for (int i = 0; i < server::SessionActor::kMaxWaitingCallers; ++i) {
+    waiting.emplace_back([&] {
+      try {
+        actor_->call_within(std::chrono::milliseconds(500), [](animator::Session&) {});
+      } catch (const server::ActorBusy&) {
+        ++busy;
+      }
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(actor_->call_within(std::chrono::seconds(5), [](animator::Session&) {}),
+               server::ActorBusy);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.05);
+  for (auto& t : waiting) t.join();
+  EXPECT_EQ(busy.load(), server::SessionActor::kMaxWaitingCallers);
+  release();
+  actor_->call_within(std::chrono::seconds(5), [](animator::Session&) {});
+}
+
+TEST_F(SessionActorTest, CallWithinThatTimesOutWhileRunningCompletesSafely) {
+  // the call itself is slow: the caller leaves, the call finishes on the actor with what it owns
+  auto finished = std::make_shared<std::atomic<bool>>(false);
+  auto payload = std::make_shared<std::vector<double>>(1000, 1.0);
+  EXPECT_THROW(actor_->call_within(std::chrono::milliseconds(50),
+                                   [finished, payload](animator::Session&) {
+                                     std::this_thread::sleep_for(std::chrono::milliseconds(300));
+                                     *finished = payload->size() == 1000;
+                                     return 7;
+                                   }),
+               server::ActorBusy);
+  payload.reset();
+  EXPECT_TRUE(eventually([&] { return finished->load(); }));
+  EXPECT_EQ(actor_->call([](animator::Session&) { return 1; }), 1);
+}
+
+TEST_F(SessionActorTest, UnsubscribingMidDragEndsTheDragOfThatConnectionOnly) {
+  auto other = std::make_shared<Recorder>();
+  actor_->subscribe(2, other);
+  const server::Position p = hand();
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
+  post({{"type", "drag_move"}, {"seq", 1}, {"target", {p[0], p[1] + 0.05, p[2]}}, {"id", 2}});
+  ASSERT_TRUE(recorder_->wait_for_answer(2));
+  // another connection leaving does not end it
+  actor_->unsubscribe(2);
+  EXPECT_TRUE(actor_->call([](animator::Session& s) { return s.dragging(); }));
+  // its own connection leaving does, as one committed gesture that is saved and announced
+  const std::uint64_t saves = actor_->stats().saves;
+  auto watcher = std::make_shared<Recorder>();
+  actor_->subscribe(3, watcher);
+  actor_->unsubscribe(1);
+  EXPECT_FALSE(actor_->call([](animator::Session& s) { return s.dragging(); }));
+  EXPECT_EQ(actor_->call([](animator::Session& s) { return s.history().undo_labels(); }),
+            std::vector<std::string>{"drag"});
+  EXPECT_GT(actor_->stats().saves, saves);
+  EXPECT_FALSE(watcher->texts_of_type("state").empty());
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// The HTTP side of docs/protocol.md: configuration, sessions, clip upload and export downloads.
-// Every request that reads or changes a session carries its token (X-Session-Token).
+// The HTTP side of docs/protocol.md: configuration, sessions (create, list, delete), clip upload
+// and export downloads. Every request that reads or changes a session carries its token
+// (X-Session-Token); creating and listing carry the server key when the server asks for one.
 
 async function errorText(res) {
   try {
@@ -15,6 +16,12 @@ export function createApi() {
   const api = {
     sessionId: null,
     token: null,
+    /** The server key (?key= of the printed URL) a server listening beyond loopback asks for. */
+    serverKey: null,
+
+    keyHeaders() {
+      return api.serverKey ? { 'X-Server-Key': api.serverKey } : {};
+    },
 
     async config() {
       const res = await fetch('/api/config', { cache: 'no-store' });
@@ -25,10 +32,27 @@ export function createApi() {
     async createSession(character = 'human48') {
       const res = await fetch('/api/sessions', {
         method: 'POST',
-        headers: { 'Content-Type': 'application/json' },
+        headers: { 'Content-Type': 'application/json', ...api.keyHeaders() },
         body: JSON.stringify({ character }),
       });
       if (!res.ok) throw new Error(`POST /api/sessions: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    /** The saved sessions: [{id, character, modified (Unix s), bytes, live}], newest first. */
+    async listSessions() {
+      const res = await fetch('/api/sessions', { headers: api.keyHeaders(), cache: 'no-store' });
+      if (!res.ok) throw new Error(`GET /api/sessions: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    /** Deletes a saved session (its token is the proof of ownership). */
+    async deleteSession(id, token) {
+      const res = await fetch(`/api/sessions/${encodeURIComponent(id)}`, {
+        method: 'DELETE',
+        headers: { 'X-Session-Token': token },
+      });
+      if (!res.ok) throw new Error(`delete session: ${await errorText(res)}`);
       return res.json();
     },
 

@@ -18,10 +18,13 @@ import { createSettingsPanel } from './panel_settings.js';
 import { createStatusPanel } from './panel_status.js';
 import { createToasts } from './panel_toasts.js';
 import { createHelpOverlay } from './panel_help.js';
+import { createSessionsPanel } from './panel_sessions.js';
+import { rememberSession } from './known_sessions.js';
 import { createViewOptions } from './panel_view_options.js';
 import { bindKeyboard } from './keyboard.js';
 
 const SESSION_STORAGE_KEY = 'pindrag.session';
+const SERVER_KEY_STORAGE_KEY = 'pindrag.key';
 
 /** Resumes the session of this tab (after a reload) or creates a new one. */
 async function openSession(api, character) {
@@ -40,7 +43,16 @@ async function openSession(api, character) {
   api.sessionId = created.id;
   api.token = created.token;
   sessionStorage.setItem(SESSION_STORAGE_KEY, JSON.stringify({ id: created.id, token: created.token }));
+  rememberSession(created.id, created.token);
   return created;
+}
+
+/** Switches this tab to another saved session: the page reloads on it (without ?character=). */
+function switchSession(id, token) {
+  sessionStorage.setItem(SESSION_STORAGE_KEY, JSON.stringify({ id, token }));
+  const url = new URL(location.href);
+  url.searchParams.delete('character');
+  location.assign(url.toString());
 }
 
 function showFatal(message) {
@@ -54,6 +66,9 @@ async function main() {
   const state = createState();
   const api = createApi();
   const params = new URLSearchParams(location.search);
+  // a server reachable from other machines prints its URL with ?key=: keep it for this tab
+  if (params.get('key')) sessionStorage.setItem(SERVER_KEY_STORAGE_KEY, params.get('key'));
+  api.serverKey = sessionStorage.getItem(SERVER_KEY_STORAGE_KEY);
 
   let config;
   try {
@@ -84,6 +99,7 @@ async function main() {
     createSelectionPanel(state, actions, skeleton),
     createSettingsPanel(state, connection),
     createStatusPanel(state, connection),
+    createSessionsPanel(state, api, switchSession),
   );
   document.getElementById('stage').append(createViewOptions(state, viewport), createToasts(state), createHelpOverlay(state));
   bindKeyboard(state, actions, drag, viewport, skeleton);
