@@ -25,7 +25,7 @@ std::string default_web_root() {
 
 struct Server::Impl {
   explicit Impl(const ServerOptions& o)
-      : options(o), registry(o.data_dir), policy(o.host, 0, 0), ws(registry, policy) {}
+      : options(o), registry(o.data_dir, o.limits), policy(o.host, 0, 0), ws(registry, policy) {}
 
   ServerOptions options;
   SessionRegistry registry;
@@ -45,6 +45,9 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
   Impl& s = *impl_;
   s.routes.registry = &s.registry;
   s.routes.policy = &s.policy;
+  if (const std::string e = animator::check_limits(options.limits); !e.empty())
+    throw std::runtime_error(e);
+  s.routes.uploads = UploadRules{options.uploads, options.limits};
   s.routes.web_root = options.web_root.empty() ? default_web_root() : options.web_root;
   if (!fs::is_regular_file(fs::path(s.routes.web_root) / "index.html")) {
     throw std::runtime_error("web root " + s.routes.web_root +
@@ -61,7 +64,8 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
       throw std::runtime_error("--character " + options.character +
                                ": neither a bundled character nor a file");
     }
-    session_from_file(options.character, "check");  // throws naming the file when it does not load
+    // throws naming the file when it does not load or its clip is over the budget
+    session_from_file(options.character, "check", options.limits);
     s.routes.served_character_name =
         safe_file_name(fs::path(options.character).stem().string(), "character");
     s.routes.served_character_path = fs::absolute(options.character).string();

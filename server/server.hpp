@@ -9,6 +9,7 @@
 #include <string>
 
 #include "server/session_registry.hpp"
+#include "server/uploads.hpp"
 
 namespace server {
 
@@ -18,8 +19,10 @@ struct ServerOptions {
   int ws_port = -1;                // -1: port + 1 (any free port when port is 0); 0: any free port
   /// A bundled character name, or a character file offered to the page under its file name.
   std::string character = "human48";
-  std::string data_dir;  // empty: sessions are kept in memory only
-  std::string web_root;  // empty: default_web_root()
+  std::string data_dir;     // empty: sessions are kept in memory only
+  std::string web_root;     // empty: default_web_root()
+  animator::Limits limits;  // every session's budgets (animator/limits.hpp)
+  UploadCaps uploads;       // largest upload per file type
 };
 
 /// The page's folder: $PINDRAG_WEB_ROOT, else the source tree's web/ recorded at build time.

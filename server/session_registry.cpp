@@ -32,7 +32,8 @@ void write_token(const std::string& path, const std::string& token) {
 
 }  // namespace
 
-SessionRegistry::SessionRegistry(std::string data_dir) : data_dir_(std::move(data_dir)) {
+SessionRegistry::SessionRegistry(std::string data_dir, animator::Limits limits)
+    : data_dir_(std::move(data_dir)), limits_(limits) {
   if (!data_dir_.empty()) fs::create_directories(fs::path(data_dir_) / "sessions");
 }
 
@@ -57,6 +58,7 @@ int SessionRegistry::restore(std::ostream& log) {
         throw std::runtime_error("missing or malformed token file");
       }
       auto session = animator::load_session(path.string());
+      session->set_limits(limits_);
       auto actor = std::make_shared<SessionActor>(id, std::move(session), path.string());
       std::lock_guard lock(mutex_);
       if (sessions_.size() >= kMaxSessions)
@@ -78,6 +80,7 @@ SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session
                             " sessions already");
     }
   }
+  session->set_limits(limits_);
   SessionHandle handle{random_hex(16), random_hex(16), nullptr};
   const std::string path = session_path(handle.id);
   if (!path.empty()) {

@@ -39,8 +39,9 @@ class SessionRegistry {
  public:
   static constexpr std::size_t kMaxSessions = 256;
 
-  /// `data_dir` empty: sessions live in memory only.
-  explicit SessionRegistry(std::string data_dir);
+  /// `data_dir` empty: sessions live in memory only. Every session created or restored is held
+  /// to `limits` (animator/limits.hpp).
+  explicit SessionRegistry(std::string data_dir, animator::Limits limits = {});
   ~SessionRegistry();
 
   /// Loads every saved session of the data directory; reports each one it cannot load to `log`
@@ -59,6 +60,7 @@ class SessionRegistry {
   std::string session_path(const std::string& id) const;
 
   std::string data_dir_;
+  animator::Limits limits_;
   mutable std::mutex mutex_;
   std::map<std::string, SessionHandle, std::less<>> sessions_;
 };
