@@ -27,7 +27,7 @@ SessionRegistry::SessionRegistry(RegistryOptions options)
 }
 
 SessionRegistry::SessionRegistry(std::string data_dir)
-    : SessionRegistry(RegistryOptions{.data_dir = std::move(data_dir)}) {}
+    : SessionRegistry(RegistryOptions{.data_dir = std::move(data_dir), .limits = {}}) {}
 
 SessionRegistry::~SessionRegistry() { stop_all(); }
 
@@ -59,6 +59,7 @@ std::shared_ptr<SessionActor> SessionRegistry::load(const std::string& id) {
   std::unique_ptr<animator::Session> session;
   try {
     session = animator::load_session(path);
+    session->set_limits(options_.limits);
   } catch (const std::exception& e) {
     throw std::runtime_error("session " + id + ": its saved file does not load: " + e.what());
   }
@@ -97,6 +98,7 @@ void SessionRegistry::make_room(std::unique_lock<std::mutex>&) {
 }
 
 SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session) {
+  session->set_limits(options_.limits);
   SessionHandle handle{random_hex(16), random_hex(16), nullptr};
   {
     std::unique_lock lock(mutex_);
