@@ -22,7 +22,9 @@ using nlohmann::json;
 
 constexpr double kGravity = 9.81;
 
-Vector3 vector_of(const json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
+Vector3 vector_of(const json& j) {
+  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
 
 std::vector<Vector3> polygon_of(const json& j) {
   std::vector<Vector3> out;
@@ -118,8 +120,8 @@ TEST(SolvePhysics, DragActsThroughDynamicPins) {
   for (const json& f : frames) {
     EXPECT_LT(f["base_residual"].get<double>(), 1e-9);
     ASSERT_FALSE(f["cop"].is_null());
-    EXPECT_TRUE(cli::inside_polygon(polygon_of(f["support_polygon"]), vector_of(f["cop"]), {},
-                                    2e-3));
+    EXPECT_TRUE(
+        cli::inside_polygon(polygon_of(f["support_polygon"]), vector_of(f["cop"]), {}, 2e-3));
   }
 }
 
@@ -144,8 +146,7 @@ TEST(SolvePhysics, FigureInTheAirHasNoCenterOfPressure) {
 TEST(SolvePhysics, BadEffectsAreRefusedNamingTheField) {
   json r = standing_request();
   r["effects"] = {"gravity", "wind"};
-  EXPECT_EQ(error_of(r).rfind("/effects/1: 'wind' is not an effect (rule: one of gravity,", 0),
-            0u)
+  EXPECT_EQ(error_of(r).rfind("/effects/1: 'wind' is not an effect (rule: one of gravity,", 0), 0u)
       << error_of(r);
   r = standing_request();
   r["character"] = "arm7";
@@ -181,10 +182,9 @@ TEST(SolvePhysics, FieldsThatWouldChangeNothingAreRefused) {
 // Without effects (absent or empty) the request takes the kinematic path and prints exactly the
 // fields it always did.
 TEST(SolvePhysics, WithoutEffectsTheFramesKeepTheirFields) {
-  const std::set<std::string> kinematic = {"drag_error",      "pin_position_error",
-                                           "pin_orientation_error", "joint_speed",
-                                           "limit_violation", "top_rank",
-                                           "microseconds"};
+  const std::set<std::string> kinematic = {
+      "drag_error",      "pin_position_error", "pin_orientation_error", "joint_speed",
+      "limit_violation", "top_rank",           "microseconds"};
   for (const json& effects : {json(), json::array()}) {
     json r = standing_request();
     r["frames"] = 2;
@@ -201,8 +201,8 @@ TEST(SolvePhysics, WithoutEffectsTheFramesKeepTheirFields) {
 }
 
 TEST(SupportPolygon, HullIsCounterClockwiseSeenFromAbove) {
-  const std::vector<Vector3> points = {{0, -0.01, 0}, {1, 0, 0},      {1, 0.02, -1}, {0, 0, -1},
-                                       {0.5, 0, -0.5}, {0.5, 0, 0},  {1, 0, 0}};
+  const std::vector<Vector3> points = {{0, -0.01, 0},  {1, 0, 0},   {1, 0.02, -1}, {0, 0, -1},
+                                       {0.5, 0, -0.5}, {0.5, 0, 0}, {1, 0, 0}};
   const std::vector<Vector3> hull = cli::support_polygon(points, {});
   ASSERT_EQ(hull.size(), 4u);  // interior, edge and repeated points dropped
   double twice_area = 0;       // about +y: (z x − x z) summed
