@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
 
 #include "core/clip.hpp"
 #include "core/configuration.hpp"
@@ -30,38 +32,137 @@ std::optional<Interpolation> interpolation_from_string(std::string_view s) {
   return std::nullopt;
 }
 
+std::shared_ptr<const KeyTrack::Keys> KeyTrack::empty_keys() {
+  static const auto kEmpty = std::make_shared<const Keys>();
+  return kEmpty;
+}
+
+namespace {
+
+bool before_time(const Keyframe& k, double t) { return k.time < t; }
+
+}  // namespace
+
 int KeyTrack::insert(Keyframe key) {
-  const int existing = find(key.time, 1e-9);
-  if (existing >= 0) {
-    keys_[existing] = std::move(key);
-    return existing;
+  auto keys = std::make_shared<Keys>(*keys_);
+  int index = find(key.time, 1e-9);
+  if (index >= 0) {
+    (*keys)[index] = std::move(key);
+  } else {
+    const auto it = std::lower_bound(keys->begin(), keys->end(), key.time, before_time);
+    index = static_cast<int>(it - keys->begin());
+    keys->insert(it, std::move(key));
   }
-  const auto it = std::lower_bound(keys_.begin(), keys_.end(), key.time,
-                                   [](const Keyframe& k, double t) { return k.time < t; });
-  const int index = static_cast<int>(it - keys_.begin());
-  keys_.insert(it, std::move(key));
+  keys_ = std::move(keys);
   return index;
 }
 
 bool KeyTrack::remove(int index) {
-  if (index < 0 || index >= static_cast<int>(keys_.size())) return false;
-  keys_.erase(keys_.begin() + index);
+  if (index < 0 || index >= size()) return false;
+  auto keys = std::make_shared<Keys>(*keys_);
+  keys->erase(keys->begin() + index);
+  keys_ = std::move(keys);
   return true;
 }
 
 int KeyTrack::move(int index, double time) {
-  if (index < 0 || index >= static_cast<int>(keys_.size())) return -1;
-  Keyframe k = keys_[index];
-  keys_.erase(keys_.begin() + index);
+  if (index < 0 || index >= size()) return -1;
+  Keyframe k = (*keys_)[index];
+  remove(index);
   k.time = time;
   return insert(std::move(k));
 }
 
 int KeyTrack::find(double time, double tolerance) const {
-  for (size_t i = 0; i < keys_.size(); ++i) {
-    if (std::abs(keys_[i].time - time) <= tolerance) return static_cast<int>(i);
+  // keys are sorted and more than 1e-9 s apart: look around the first key not before time − tol
+  const Keys& keys = *keys_;
+  const auto it = std::lower_bound(keys.begin(), keys.end(), time - tolerance, before_time);
+  for (auto k = it; k != keys.end() && k->time <= time + tolerance; ++k) {
+    if (std::abs(k->time - time) <= tolerance) return static_cast<int>(k - keys.begin());
   }
   return -1;
+}
+
+void KeyTrack::apply(const KeyChange& change, bool forward) {
+  const std::vector<Keyframe>& out = forward ? change.removed : change.added;
+  const std::vector<Keyframe>& in = forward ? change.added : change.removed;
+  if (out.empty() && in.empty()) return;
+  auto keys = std::make_shared<Keys>();
+  keys->reserve(keys_->size() + in.size());
+  // one merge over three sorted lists: drop the keys at the times of `out`, add those of `in`
+  auto o = out.begin();
+  auto i = in.begin();
+  for (const Keyframe& k : *keys_) {
+    while (o != out.end() && o->time < k.time) ++o;
+    while (i != in.end() && i->time < k.time) keys->push_back(*i++);
+    const bool dropped = o != out.end() && o->time == k.time;
+    const bool replaced = i != in.end() && i->time == k.time;
+    if (!dropped && !replaced) keys->push_back(k);
+  }
+  keys->insert(keys->end(), i, in.end());
+  keys_ = std::move(keys);
+}
+
+std::size_t KeyChange::bytes() const {
+  std::size_t n = 0;
+  for (const auto* list : {&removed, &added}) {
+    n += list->capacity() * sizeof(Keyframe);
+    for (const Keyframe& k : *list) n += static_cast<std::size_t>(k.q.size()) * sizeof(double);
+  }
+  return n;
+}
+
+KeyChange diff_keys(const KeyTrack& before, const KeyTrack& after) {
+  KeyChange c;
+  if (before.shares_keys_with(after)) return c;
+  const std::vector<Keyframe>& b = before.keys();
+  const std::vector<Keyframe>& a = after.keys();
+  std::size_t i = 0, j = 0;
+  while (i < b.size() || j < a.size()) {
+    if (j == a.size() || (i < b.size() && b[i].time < a[j].time)) {
+      c.removed.push_back(b[i++]);
+    } else if (i == b.size() || a[j].time < b[i].time) {
+      c.added.push_back(a[j++]);
+    } else {
+      if (!(b[i] == a[j])) {
+        c.removed.push_back(b[i]);
+        c.added.push_back(a[j]);
+      }
+      ++i;
+      ++j;
+    }
+  }
+  return c;
+}
+
+KeyChange compose(const KeyChange& first, const KeyChange& second) {
+  // per time: the key there before `first` and the key there after `second` (none: absent)
+  struct Ends {
+    bool by_first = false, by_second = false;
+    std::optional<Keyframe> removed1, added1, removed2, added2;
+  };
+  std::map<double, Ends> times;
+  auto note = [&times](const std::vector<Keyframe>& keys, bool Ends::*by,
+                       std::optional<Keyframe> Ends::*slot) {
+    for (const Keyframe& k : keys) {
+      Ends& e = times[k.time];
+      e.*by = true;
+      e.*slot = k;
+    }
+  };
+  note(first.removed, &Ends::by_first, &Ends::removed1);
+  note(first.added, &Ends::by_first, &Ends::added1);
+  note(second.removed, &Ends::by_second, &Ends::removed2);
+  note(second.added, &Ends::by_second, &Ends::added2);
+  KeyChange c;
+  for (const auto& [t, e] : times) {
+    const std::optional<Keyframe>& start = e.by_first ? e.removed1 : e.removed2;
+    const std::optional<Keyframe>& end = e.by_second ? e.added2 : e.added1;
+    if (start.has_value() == end.has_value() && (!start || *start == *end)) continue;
+    if (start) c.removed.push_back(*start);
+    if (end) c.added.push_back(*end);
+  }
+  return c;
 }
 
 namespace {
@@ -101,24 +202,25 @@ Quaternion squad_control(const Quaternion& prev, const Quaternion& q, const Quat
 }  // namespace
 
 void KeyTrack::sample(const core::Model& model, double t, Eigen::VectorXd& q_out) const {
-  if (keys_.empty()) {
+  const Keys& keys = *keys_;
+  if (keys.empty()) {
     q_out = core::neutral_configuration(model);
     return;
   }
-  if (t <= keys_.front().time) {
-    q_out = keys_.front().q;
+  if (t <= keys.front().time) {
+    q_out = keys.front().q;
     return;
   }
-  if (t >= keys_.back().time) {
-    q_out = keys_.back().q;
+  if (t >= keys.back().time) {
+    q_out = keys.back().q;
     return;
   }
-  const auto it = std::upper_bound(keys_.begin(), keys_.end(), t,
+  const auto it = std::upper_bound(keys.begin(), keys.end(), t,
                                    [](double tt, const Keyframe& k) { return tt < k.time; });
-  const int i2 = static_cast<int>(it - keys_.begin());
+  const int i2 = static_cast<int>(it - keys.begin());
   const int i1 = i2 - 1;
-  const Keyframe& k1 = keys_[i1];
-  const Keyframe& k2 = keys_[i2];
+  const Keyframe& k1 = keys[i1];
+  const Keyframe& k2 = keys[i2];
   if (t == k1.time || k1.interpolation == Interpolation::kStep) {
     q_out = k1.q;
     return;
@@ -129,8 +231,8 @@ void KeyTrack::sample(const core::Model& model, double t, Eigen::VectorXd& q_out
     return;
   }
   // smooth: Catmull–Rom on scalars, squad on rotations
-  const Keyframe& k0 = keys_[std::max(0, i1 - 1)];
-  const Keyframe& k3 = keys_[std::min(static_cast<int>(keys_.size()) - 1, i2 + 1)];
+  const Keyframe& k0 = keys[std::max(0, i1 - 1)];
+  const Keyframe& k3 = keys[std::min(static_cast<int>(keys.size()) - 1, i2 + 1)];
   q_out.resize(model.nq);
   for (int j = 1; j < model.njoints; ++j) {
     const int iq = model.idx_q[j];

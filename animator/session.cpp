@@ -101,10 +101,16 @@ void Session::drag_begin(int link,
   check_link(link);
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
+  const bool in_motion = playback_.playing && doc_.clip && doc_.clip->size() > 1;
+  if (in_motion && static_cast<int>(doc_.layers.size()) >= limits_.max_layers) {
+    throw BudgetError("the session has " + std::to_string(doc_.layers.size()) +
+                      " edit layers, the most it may hold (set by " + kMaxLayersSetting +
+                      "; bake or remove layers to edit in motion again)");
+  }
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
   drag_ = Drag{link, p_LinkPoint, target_W, std::nullopt, target_W};
-  if (playback_.playing && doc_.clip && doc_.clip->size() > 1) start_motion_edit();
+  if (in_motion) start_motion_edit();
   settling_ = true;
 }
 
@@ -205,139 +211,6 @@ void Session::set_edit_falloff(double seconds) {
   const Document before = doc_;
   doc_.edit_falloff = seconds;
   commit(before, "edit falloff");
-}
-
-// --- keyframes -----------------------------------------------------------------------------------
-
-int Session::key_insert(std::optional<double> time, Interpolation interpolation) {
-  const double t = time.value_or(playback_.time);
-  if (!std::isfinite(t) || t < 0) throw SessionError("time", "must be a finite time >= 0");
-  const Document before = doc_;
-  const int index = doc_.keys.insert(Keyframe{t, doc_.q, interpolation});
-  commit(before, "insert key");
-  return index;
-}
-
-void Session::key_delete(int index) {
-  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("index", "no key " + std::to_string(index));
-  }
-  const Document before = doc_;
-  doc_.keys.remove(index);
-  commit(before, "delete key");
-}
-
-int Session::key_move(int index, double time) {
-  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("index", "no key " + std::to_string(index));
-  }
-  if (!std::isfinite(time) || time < 0) throw SessionError("time", "must be a finite time >= 0");
-  const Document before = doc_;
-  const int moved = doc_.keys.move(index, time);
-  commit(before, "move key");
-  return moved;
-}
-
-void Session::key_set_interpolation(int index, Interpolation interpolation) {
-  if (index < 0 || index >= static_cast<int>(doc_.keys.keys().size())) {
-    throw SessionError("index", "no key " + std::to_string(index));
-  }
-  const Document before = doc_;
-  Keyframe k = doc_.keys.keys()[index];
-  k.interpolation = interpolation;
-  doc_.keys.insert(std::move(k));
-  commit(before, "key interpolation");
-}
-
-void Session::bake_keys(double rate) {
-  if (doc_.keys.empty()) throw SessionError("there are no keys to bake");
-  if (!std::isfinite(rate) || rate <= 0 || rate > 1000)
-    throw SessionError("rate", "must be in (0, 1000]");
-  core::Clip clip;
-  clip.frame_time = 1.0 / rate;
-  const int n = static_cast<int>(std::floor(doc_.keys.duration() * rate + 1e-9)) + 1;
-  clip.frames.resize(n);
-  for (int f = 0; f < n; ++f) doc_.keys.sample(*model_, f / rate, clip.frames[f]);
-  set_clip(std::move(clip), "bake keys");
-}
-
-// --- clips and layers ----------------------------------------------------------------------------
-
-void Session::set_clip(core::Clip clip, const std::string& label) {
-  if (const std::string e = core::check_clip(*model_, clip); !e.empty())
-    throw SessionError("clip", e);
-  if (clip.empty()) throw SessionError("clip", "has no frames");
-  const Document before = doc_;
-  doc_.clip = std::make_shared<const core::Clip>(std::move(clip));
-  doc_.layers.clear();
-  playback_.time = std::clamp(playback_.time, 0.0, doc_.clip->duration());
-  show_animation_at(playback_.time);
-  commit(before, label);
-}
-
-namespace {
-void check_layer(const LayerStack& layers, int index) {
-  if (index < 0 || index >= static_cast<int>(layers.size())) {
-    throw SessionError("index", "no layer " + std::to_string(index));
-  }
-}
-}  // namespace
-
-void Session::set_layer_muted(int index, bool muted) {
-  check_layer(doc_.layers, index);
-  const Document before = doc_;
-  auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
-  copy->muted = muted;
-  doc_.layers[index] = copy;
-  show_animation_at(playback_.time);
-  commit(before, muted ? "mute layer" : "unmute layer");
-}
-
-void Session::set_layer_weight(int index, double weight) {
-  check_layer(doc_.layers, index);
-  if (!std::isfinite(weight) || weight < 0 || weight > 10)
-    throw SessionError("weight", "must be in [0, 10]");
-  const Document before = doc_;
-  auto copy = std::make_shared<EditLayer>(*doc_.layers[index]);
-  copy->weight = weight;
-  doc_.layers[index] = copy;
-  show_animation_at(playback_.time);
-  commit(before, "layer weight");
-}
-
-void Session::remove_layer(int index) {
-  check_layer(doc_.layers, index);
-  const Document before = doc_;
-  doc_.layers.erase(doc_.layers.begin() + index);
-  show_animation_at(playback_.time);
-  commit(before, "remove layer");
-}
-
-void Session::bake_layers() {
-  if (!doc_.clip) throw SessionError("there is no clip to bake the layers into");
-  const Document before = doc_;
-  doc_.clip = std::make_shared<const core::Clip>(bake(*model_, *doc_.clip, doc_.layers));
-  doc_.layers.clear();
-  commit(before, "bake layers");
-}
-
-core::Clip Session::animation_clip() const {
-  if (doc_.clip) return bake(*model_, *doc_.clip, doc_.layers);
-  core::Clip out;
-  out.frame_time = 1.0 / kDefaultClipRate;
-  if (doc_.keys.empty()) {
-    out.frames.push_back(doc_.q);
-    return out;
-  }
-  const int n = static_cast<int>(std::floor(doc_.keys.duration() * kDefaultClipRate + 1e-9)) + 1;
-  out.frames.resize(n);
-  for (int f = 0; f < n; ++f) doc_.keys.sample(*model_, f / kDefaultClipRate, out.frames[f]);
-  return out;
-}
-
-double Session::duration() const {
-  if (doc_.clip) return doc_.clip->duration();
-  return doc_.keys.duration();
 }
 
 // --- playback and recording ----------------------------------------------------------------------
@@ -461,6 +334,35 @@ bool Session::solve_step() {
   return true;
 }
 
+bool Session::edit_in_motion(double t, TickResult& result) {
+  // solve every clip frame the clock passed since the last tick
+  const int frame = std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
+                               doc_.clip->size() - 1);
+  if (frame < motion_edit_frame_) {
+    // the clock wrapped: keep what was edited as a layer, start a new edit here (unless the
+    // layers are at their limit: then the drag rests until released)
+    finish_motion_edit();
+    if (static_cast<int>(doc_.layers.size()) >= limits_.max_layers) return false;
+    start_motion_edit();
+  }
+  ik::LinkTask d{.role = ik::kDrag,
+                 .link = drag_->link,
+                 .p_LinkPoint = drag_->p_LinkPoint,
+                 .target_W = drag_->target_W};
+  if (drag_->rotation) {
+    d.target_R_W = *drag_->rotation;
+    d.mode = ik::TaskMode::kPose;
+  }
+  for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
+    motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
+  }
+  if (frame > motion_edit_frame_) motion_edit_frame_ = frame;
+  doc_.q = motion_editor_->pose();
+  refresh_kinematics();
+  result.report = &motion_editor_->report();
+  return true;
+}
+
 Session::TickResult Session::tick(double dt) {
   TickResult result;
   if (!std::isfinite(dt) || dt < 0) dt = 0;
@@ -478,33 +380,8 @@ Session::TickResult Session::tick(double dt) {
       playback_.playing = false;
     }
     playback_.time = t;
-    if (motion_editor_ && drag_) {
-      // editing in motion: solve every clip frame the clock passed since the last tick
-      const int frame = std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
-                                   doc_.clip->size() - 1);
-      if (frame < motion_edit_frame_) {
-        // the clock wrapped: keep what was edited as a layer, start a new edit here
-        finish_motion_edit();
-        start_motion_edit();
-      }
-      ik::LinkTask d{.role = ik::kDrag,
-                     .link = drag_->link,
-                     .p_LinkPoint = drag_->p_LinkPoint,
-                     .target_W = drag_->target_W};
-      if (drag_->rotation) {
-        d.target_R_W = *drag_->rotation;
-        d.mode = ik::TaskMode::kPose;
-      }
-      for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
-        motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
-      }
-      if (frame > motion_edit_frame_) motion_edit_frame_ = frame;
-      doc_.q = motion_editor_->pose();
-      refresh_kinematics();
-      result.report = &motion_editor_->report();
-    } else {
-      show_animation_at(t);
-    }
+    // editing in motion, or the animation as it is
+    if (!(motion_editor_ && drag_ && edit_in_motion(t, result))) show_animation_at(t);
     result.pose_changed = true;
   } else if (drag_ || settling_) {
     if (solve_step()) {
@@ -516,9 +393,15 @@ Session::TickResult Session::tick(double dt) {
   }
   if (recording_) {
     record_clock_ += dt;
-    while (record_clock_ >= recording_->frame_time) {
+    const std::int64_t budget = recording_frame_budget();
+    while (record_clock_ >= recording_->frame_time && recording_->size() < budget) {
       recording_->frames.push_back(doc_.q);
       record_clock_ -= recording_->frame_time;
+    }
+    // at the clip limits the recording stops, like a tape running out, and becomes the clip
+    if (recording_->size() >= budget) {
+      record(false);
+      result.committed = true;
     }
   }
   return result;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -20,6 +21,7 @@
 #include "animator/edit_layer.hpp"
 #include "animator/history.hpp"
 #include "animator/keyframes.hpp"
+#include "animator/limits.hpp"
 #include "animator/motion_editor.hpp"
 #include "animator/pin.hpp"
 #include "core/clip.hpp"
@@ -51,6 +53,13 @@ class SessionError : public std::runtime_error {
   std::string field_;
 };
 
+/// A request refused because it would take the session past one of its Limits; what() names the
+/// limit and the setting that changes it.
+class BudgetError : public SessionError {
+ public:
+  using SessionError::SessionError;
+};
+
 /// Frame rate of recordings and of clips made from keys.
 constexpr double kDefaultClipRate = 30.0;
 
@@ -72,6 +81,12 @@ class Session {
   std::shared_ptr<const core::Model> model_ptr() const { return model_; }
   const std::string& character() const { return character_; }
 
+  // --- budgets (animator/limits.hpp) ---------------------------------------------------------
+  /// Sets the budgets every later edit is held to (what the session holds already is kept) and
+  /// the undo history's byte budget. @throws SessionError when a limit is not usable
+  void set_limits(const Limits& limits);
+  const Limits& limits() const { return limits_; }
+
   // --- the pose ---------------------------------------------------------------------------
   const Eigen::VectorXd& q() const { return doc_.q; }
   /// World poses of all links for the current pose.
@@ -80,7 +95,9 @@ class Session {
   void set_pose(const Eigen::VectorXd& q);
 
   // --- dragging: one undo entry per gesture -------------------------------------------------
-  /// Grabs point p_LinkPoint (link frame) of `link`; the target starts at target_W.
+  /// Grabs point p_LinkPoint (link frame) of `link`; the target starts at target_W. During
+  /// playback this starts editing in motion. @throws BudgetError when that would make an edit
+  /// layer beyond Limits::max_layers
   void drag_begin(int link,
                   const core::Vector3& target_W,
                   const core::Vector3& p_LinkPoint = core::Vector3::Zero());
@@ -111,6 +128,7 @@ class Session {
 
   // --- keyframes -------------------------------------------------------------------------------
   /// Keys the current pose at time t (default: the playback time). Returns its index.
+  /// @throws BudgetError past Limits::max_clip_seconds, or for a new key beyond max_keys
   int key_insert(std::optional<double> time = std::nullopt,
                  Interpolation interpolation = Interpolation::kSmooth);
   void key_delete(int index);
@@ -118,10 +136,12 @@ class Session {
   void key_set_interpolation(int index, Interpolation interpolation);
   const KeyTrack& keys() const { return doc_.keys; }
   /// Samples the keys into the base clip at `rate` frames per second (one undo entry).
+  /// @throws BudgetError when that clip would exceed the clip limits (nothing is sampled)
   void bake_keys(double rate = kDefaultClipRate);
 
   // --- clips and edit layers -------------------------------------------------------------------
   /// Replaces the base clip (an import or a recording). Its model must be this session's.
+  /// @throws BudgetError when the clip exceeds the clip limits
   void set_clip(core::Clip clip, const std::string& label = "set clip");
   const core::Clip* clip() const { return doc_.clip.get(); }
   const LayerStack& layers() const { return doc_.layers; }
@@ -132,7 +152,20 @@ class Session {
   void bake_layers();
   /// The animation as one clip: the layered base clip, else the keys sampled at the clip rate,
   /// else the current pose as a single frame.
+  /// @throws BudgetError when it has more frames than the clip limits allow (a session restored
+  ///         from a file made under other limits): ask for a range of frames instead
   core::Clip animation_clip() const;
+  /// Frames [first, last] of animation_clip(), sampled from the clip, layers and keys directly.
+  /// @throws SessionError for a range outside [0, animation_frames()), BudgetError for a range
+  ///         longer than the clip limits allow
+  core::Clip animation_clip(std::int64_t first, std::int64_t last) const;
+  /// How many frames animation_clip() has, without building it.
+  std::int64_t animation_frames() const;
+  /// Seconds between the frames of animation_clip().
+  double animation_frame_time() const;
+  /// Frame f of animation_clip(), bit for bit, without building the clip: one layered clip
+  /// frame or one sample of the keys. @throws SessionError when f is not a frame of it
+  void animation_frame(std::int64_t f, Eigen::VectorXd& q_out) const;
   /// Duration of the animation (clip, else keys).
   double duration() const;
 
@@ -169,6 +202,7 @@ class Session {
   struct TickResult {
     bool pose_changed = false;
     const ik::Report* report = nullptr;  // when the solver ran
+    bool committed = false;  // an edit was committed: a recording stopped at the clip budget
   };
   /// Advances by dt seconds of wall time: playback, the solver while something moves, the
   /// recorder. Cheap when nothing moves.
@@ -196,6 +230,11 @@ class Session {
   void show_animation_at(double t);
   void start_motion_edit();
   void finish_motion_edit();
+  /// One tick of editing in motion at clip time t; false when no edit runs (layers at the limit).
+  bool edit_in_motion(double t, TickResult& result);
+  void check_key_time(double time) const;
+  void check_clip_budget(std::int64_t frames, double frame_time, const std::string& field) const;
+  std::int64_t recording_frame_budget() const;
 
   std::shared_ptr<const core::Model> model_;
   std::string character_;
@@ -203,6 +242,7 @@ class Session {
   Document doc_;
   Playback playback_;
   History history_;
+  Limits limits_;
 
   // the live gesture
   struct Drag {

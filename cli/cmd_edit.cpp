@@ -2,6 +2,7 @@
 // pins and drag trajectories are played through an animator::Session and the edited motion is
 // written (docs/edit-script.md).
 #include <iostream>
+#include <limits>
 
 #include "animator/session.hpp"
 #include "cli/clip_file.hpp"
@@ -17,6 +18,17 @@ struct EditArgs {
   std::string clip, script, out;
 };
 
+// Batch work on a file the operator chose: the clip and its edits are bounded by the file and
+// the script, not by the server's per-session budgets (animator/limits.hpp).
+animator::Limits batch_limits() {
+  animator::Limits l;
+  l.max_clip_seconds = 1e12;
+  l.max_clip_frames = std::numeric_limits<std::int64_t>::max();
+  l.max_clip_values = std::numeric_limits<std::int64_t>::max();
+  l.max_layers = std::numeric_limits<int>::max();
+  return l;
+}
+
 void edit(const EditArgs& a) {
   const auto out_format = clip_format(a.out);
   if (!out_format || !writable(*out_format)) {
@@ -31,6 +43,7 @@ void edit(const EditArgs& a) {
     throw RequestError(a.script + ": " + e.what());
   }
   animator::Session session(source.model, source.model->name);
+  session.set_limits(batch_limits());
   session.set_clip(source.clip);
   try {
     run_edit_script(session, script);

@@ -60,6 +60,45 @@ int serve(const server::ServerOptions& options) {
   return 0;
 }
 
+// The budgets of docs/protocol.md, "Limits": every session's and every upload's.
+void add_limit_options(CLI::App& cmd, server::ServerOptions& o) {
+  animator::Limits& l = o.limits;
+  cmd.add_option("--max-clip-seconds", l.max_clip_seconds, "longest clip or key time (seconds)")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e9))
+      ->group("Limits");
+  cmd.add_option("--max-clip-frames", l.max_clip_frames, "most frames of one clip")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{2'000'000'000}))
+      ->group("Limits");
+  cmd.add_option("--max-clip-values", l.max_clip_values,
+                 "most numbers of one clip (frames x coordinates)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40))
+      ->group("Limits");
+  cmd.add_option("--max-keys", l.max_keys, "most keys of a session")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1'000'000'000))
+      ->group("Limits");
+  cmd.add_option("--max-layers", l.max_layers, "most edit layers of a session")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1'000'000'000))
+      ->group("Limits");
+  const auto bytes = [&cmd](const char* name, std::size_t& value, const char* what) {
+    cmd.add_option(name, value, std::string(what) + " (bytes; 64MiB, 512KiB, ... also work)")
+        ->capture_default_str()
+        ->transform(CLI::AsSizeValue(false))
+        ->group("Limits");
+  };
+  bytes("--max-undo-bytes", l.max_undo_bytes, "undo history memory of a session");
+  bytes("--max-upload-urdf", o.uploads.urdf, "largest .urdf upload");
+  bytes("--max-upload-json", o.uploads.json, "largest character .json upload");
+  bytes("--max-upload-bvh", o.uploads.bvh, "largest .bvh upload");
+  bytes("--max-upload-gltf", o.uploads.gltf, "largest .gltf or .glb upload");
+  bytes("--max-upload-fbx", o.uploads.fbx, "largest .fbx upload");
+  bytes("--max-upload-dae", o.uploads.dae, "largest .dae upload");
+}
+
 }  // namespace
 
 void add_serve_command(CLI::App& app) {
@@ -92,6 +131,7 @@ void add_serve_command(CLI::App& app) {
                   "delete saved sessions nobody opened or changed for this many days (0: never)")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
+  add_limit_options(*cmd, *options);
   cmd->callback([options] {
     const int code = serve(*options);
     if (code != 0) throw CLI::RuntimeError(code);

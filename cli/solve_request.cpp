@@ -4,10 +4,13 @@
 #include <cmath>
 
 #include "cli/json_fields.hpp"
+#include "cli/solve_physics.hpp"
+#include "cli/solve_spec.hpp"
 #include "core/configuration.hpp"
 #include "core/kinematics.hpp"
 #include "ik/solver.hpp"
 #include "io/bundled_characters.hpp"
+#include "sim/placement.hpp"
 
 namespace cli {
 
@@ -19,10 +22,11 @@ using io::JsonField;
 using io::JsonFields;
 using nlohmann::json;
 
-// Unknown fields are refused, not ignored: a misspelt or unsupported field (say "effects") would
-// otherwise change nothing and go unnoticed.
+// Unknown fields are refused, not ignored: a misspelt or unsupported field (say "physic_dt")
+// would otherwise change nothing and go unnoticed.
 const std::initializer_list<std::string_view> kRequestKeys = {
-    "character", "frames", "dt", "settings", "drag", "drags", "pins", "joint_references", "start"};
+    "character", "frames",           "dt",    "settings", "drag",      "drags",
+    "pins",      "joint_references", "start", "effects",  "physics_dt"};
 const std::initializer_list<std::string_view> kSettingsKeys = {
     "damping",
     "iterations",
@@ -96,11 +100,6 @@ ik::SolverSettings settings_from(JsonFields& f, const JsonField& r) {
   if (const std::string e = ik::validate(s); !e.empty()) f.fail(j, e);
   return s;
 }
-
-struct DragSpec {
-  ik::LinkTask task{.role = ik::kDrag};
-  int release_at = -1;  // frame at which the drag is let go; -1: never
-};
 
 DragSpec drag_from(JsonFields& f, const JsonField& j, const core::Model& m) {
   f.object(j);
@@ -176,16 +175,6 @@ ik::JointReferenceTask reference_from(JsonFields& f,
   return t;
 }
 
-struct Request {
-  std::shared_ptr<const core::Model> model;
-  int frames = 120;
-  ik::SolverSettings settings;
-  Eigen::VectorXd q;  // frame 0
-  std::vector<DragSpec> drags;
-  std::vector<ik::LinkTask> pins;
-  std::vector<ik::JointReferenceTask> references;
-};
-
 // The configuration at frame 0: "start.q", or the rest configuration.
 Eigen::VectorXd start_from(JsonFields& f, const JsonField& start, const core::Model& m) {
   if (!start) return core::rest_configuration(m);
@@ -199,12 +188,57 @@ Eigen::VectorXd start_from(JsonFields& f, const JsonField& start, const core::Mo
   return q;
 }
 
-Request read_request(JsonFields& f, const JsonField& r) {
+// "effects" (names of sim::Effect) and "physics_dt". With ground_contact the character starts
+// standing on the ground (sim::standing_configuration), so that pins default to where the points
+// are there. A field that would change nothing on the chosen path is refused.
+void read_physics(JsonFields& f, const JsonField& r, SolveSpec& out) {
+  std::vector<std::string> names;
+  const JsonField effects = r["effects"];
+  if (effects) {
+    f.array(effects, 16, "effects");
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+      const std::string name = f.string(effects[k]);
+      if (!sim::effect_from_string(name)) {
+        f.fail(effects[k], io::in_quotes(name) +
+                               " is not an effect (rule: one of gravity, ground_contact, "
+                               "friction, hard_limits, self_collision, dynamic_pins)");
+      }
+      names.push_back(name);
+    }
+  }
+  out.scene = sim::Scene::from_names(names);
+  if (!out.physics()) {
+    if (r["physics_dt"]) f.fail(r["physics_dt"], "applies only with effects");
+    return;
+  }
+  out.physics_dt = f.number_or(r["physics_dt"], out.physics_dt, {1e-6, 0.1});
+  if (r["settings"]) {
+    f.fail(r["settings"], "applies to the kinematic solver only (without effects)");
+  }
+  const core::Model& m = *out.model;
+  if ((out.scene.ground_contact || out.scene.dynamic_pins) &&
+      m.joint_type[1] != core::JointType::kFree) {
+    f.fail(effects, "ground_contact and dynamic_pins need a free root joint; character '" + m.name +
+                        "' has a " + core::to_string(m.joint_type[1]) + " root");
+  }
+  if (out.scene.ground_contact) out.q = sim::standing_configuration(m, out.q, {});
+}
+
+// With effects, drags, pins and references act only through dynamic_pins.
+void refuse_idle_tasks(JsonFields& f, const JsonField& r, const SolveSpec& s) {
+  if (!s.physics() || s.scene.dynamic_pins) return;
+  for (const char* key : {"drag", "drags", "pins", "joint_references"}) {
+    if (r[key])
+      f.fail(r[key], "acts on a simulated body only with 'dynamic_pins' among the effects");
+  }
+}
+
+SolveSpec read_request(JsonFields& f, const JsonField& r) {
   f.object(r);
   f.refuse_unknown_keys(r, kRequestKeys);
   const JsonField character = r["character"];
   if (!character) f.fail(character, "missing (a bundled name or a file)");
-  Request out;
+  SolveSpec out;
   try {
     out.model = io::load_character(f.string(character)).model;
   } catch (const core::ModelError& e) {
@@ -214,6 +248,7 @@ Request read_request(JsonFields& f, const JsonField& r) {
   out.frames = static_cast<int>(f.integer_or(r["frames"], 120, 0, 1000000));
   out.settings = settings_from(f, r);
   out.q = start_from(f, r["start"], m);
+  read_physics(f, r, out);
   core::Data data(m);
   core::forward_kinematics(m, data, out.q);
   if (r["drag"]) out.drags.push_back(drag_from(f, r["drag"], m));
@@ -233,6 +268,7 @@ Request read_request(JsonFields& f, const JsonField& r) {
       out.references.push_back(reference_from(f, refs[name], name, m));
     }
   }
+  refuse_idle_tasks(f, r, out);
   return out;
 }
 
@@ -262,13 +298,9 @@ json frame_errors(const std::vector<DragSpec>& drags,
   return frame;
 }
 
-}  // namespace
-
-json run_solve_request(const json& request) {
-  JsonFields f = request_fields();
-  Request r = io::rethrow_as<RequestError>([&] { return read_request(f, JsonField(request)); });
+// the kinematic path: the IK solver steps `q` once per frame
+json run_kinematic(const SolveSpec& r, Eigen::VectorXd& q) {
   const core::Model& m = *r.model;
-  Eigen::VectorXd& q = r.q;
   core::Data data(m);
   core::forward_kinematics(m, data, q);
 
@@ -290,6 +322,19 @@ json run_solve_request(const json& request) {
     }
     out_frames.push_back(frame_errors(r.drags, data, rep));
   }
+  return out_frames;
+}
+
+}  // namespace
+
+json run_solve_request(const json& request) {
+  JsonFields f = request_fields();
+  SolveSpec r = io::rethrow_as<RequestError>([&] { return read_request(f, JsonField(request)); });
+  const core::Model& m = *r.model;
+  Eigen::VectorXd& q = r.q;
+  json out_frames = r.physics() ? run_physics(r, q) : run_kinematic(r, q);
+  core::Data data(m);
+  core::forward_kinematics(m, data, q);
   json links = json::array();
   for (int i = 1; i < m.njoints; ++i) {
     const Vector3& p = data.X_W[i].p;

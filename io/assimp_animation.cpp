@@ -63,9 +63,22 @@ void check_keys(const aiAnimation& a,
 
 }  // namespace
 
+void check_budget(const AnimInfo& info,
+                  const ClipBudget& budget,
+                  double frame_rate,
+                  std::int64_t per_frame) {
+  const std::string why = clip_budget_refusal(budget, info.frames, 1.0 / frame_rate, per_frame);
+  if (why.empty()) return;
+  throw std::runtime_error("animation '" + std::string(info.anim->mName.C_Str()) + "' (" +
+                           num((info.end - info.start) / info.ticks_per_second) +
+                           " s from its first to its last key, at " + num(frame_rate) +
+                           " frames per second): " + why);
+}
+
 AnimInfo anim_info(const aiAnimation& a,
                    const SceneNodes& scene,
                    double frame_rate,
+                   const ClipBudget& budget,
                    Warnings& warnings) {
   AnimInfo info;
   info.anim = &a;
@@ -102,6 +115,7 @@ AnimInfo anim_info(const aiAnimation& a,
                              num(seconds) + " s: more than " + num(kMaxFrames) + " frames");
   }
   info.frames = static_cast<int>(n);
+  check_budget(info, budget, frame_rate, 0);
   return info;
 }
 
@@ -172,7 +186,8 @@ Motion sample_motion(const aiScene& scene,
   double scale_error = 0;
   std::vector<Transform> X;
   for (unsigned a = 0; a < scene.mNumAnimations; ++a) {
-    out.anims.push_back(anim_info(*scene.mAnimations[a], nodes, options.frame_rate, warnings));
+    out.anims.push_back(
+        anim_info(*scene.mAnimations[a], nodes, options.frame_rate, options.budget, warnings));
     const AnimInfo& info = out.anims.back();
     for (int k = 0; k < info.frames; ++k) {
       poses.at(info, tick_of_frame(info, k, options.frame_rate), X, scale_error);

@@ -26,11 +26,20 @@ struct AnimInfo {
 };
 
 /// The channels, key span and frame count of `a` (a channel without a node gets a warning).
-/// @throws std::runtime_error for non-finite or decreasing key times, or too many frames
+/// @throws std::runtime_error for non-finite or decreasing key times, or a length or frame count
+///         beyond `budget`
 AnimInfo anim_info(const aiAnimation& a,
                    const SceneNodes& nodes,
                    double frame_rate,
+                   const ClipBudget& budget,
                    Warnings& warnings);
+
+/// Refuses an animation beyond `budget` with `per_frame` numbers per frame (0: length and frame
+/// count only). @throws std::runtime_error naming the animation and the limit
+void check_budget(const AnimInfo& info,
+                  const ClipBudget& budget,
+                  double frame_rate,
+                  std::int64_t per_frame);
 
 /// File time (ticks) of frame k: start + k / frame_rate seconds, clamped to the last key.
 double tick_of_frame(const AnimInfo& info, int k, double frame_rate);

@@ -79,6 +79,8 @@ SkinnedImport convert_scene(const aiScene& scene,
   std::vector<int> model_link(nl);  // model link index of each link
   for (std::size_t k = 0; k < nl; ++k) model_link[k] = out.model->link_index(skeleton.link_name[k]);
   out.mesh = build_mesh(scene, skinned, world, skeleton, model_link, warnings);
+  for (const AnimInfo& info : motion.anims)
+    check_budget(info, options.budget, options.frame_rate, out.model->nq);
   out.clips = build_clips(*out.model, model_link, skeleton, motion, poses, options.frame_rate);
   out.unit_scale = world.unit_scale;
   out.dropped_offset.assign(out.model->njoints, 0.0);

@@ -34,6 +34,7 @@
 #include "core/clip.hpp"
 #include "core/model.hpp"
 #include "core/skin.hpp"
+#include "io/clip_budget.hpp"
 #include "io/core_names.hpp"
 #include "io/sandbox.hpp"
 
@@ -54,6 +55,9 @@ struct ImportOptions {
   // a non-root bone whose offset from its parent moves more than this (metres) during a clip
   // gets a free joint, so the clip is reproduced; below it the bone is spherical
   double translating_tolerance = 1e-3;
+  // an animation beyond it (its key span at frame_rate; frames × the model's coordinates) is
+  // refused before it is resampled
+  ClipBudget budget;
 };
 
 /// One animation of the file, resampled.

@@ -317,7 +317,7 @@ BvhImport load_bvh_string(std::string_view text,
     fail(source_name, std::to_string(text.size()) + " bytes (rule: at most " +
                           std::to_string(kMaxBvhBytes) + " bytes, kMaxBvhBytes)");
   }
-  return import_bvh(parse_bvh(text, source_name), source_name, options);
+  return import_bvh(parse_bvh(text, source_name, options.budget), source_name, options);
 }
 
 BvhImport load_bvh_file(const std::string& path, const BvhImportOptions& options) {

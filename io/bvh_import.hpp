@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "io/bvh_document.hpp"
+#include "io/clip_budget.hpp"
 
 namespace io {
 
@@ -61,6 +62,7 @@ struct BvhImportOptions {
   std::optional<double> scale;           // metres per file unit; empty: bvh_auto_scale
   double total_mass = 70.0;              // kg, split over the links by bone length
   std::function<void(double)> progress;  // fraction done in [0, 1], called a few dozen times
+  ClipBudget budget;  // load_bvh_string and load_bvh_file refuse a longer clip (parse_bvh)
 };
 
 struct BvhImport {

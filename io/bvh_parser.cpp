@@ -39,8 +39,8 @@ bool is_keyword(std::string_view s) {
 // motion lines, read straight from the text (they hold nearly all of its bytes).
 class Parser {
  public:
-  Parser(std::string_view text, const std::string& source)
-      : text_(text), source_(source), tz_(text, source) {}
+  Parser(std::string_view text, const std::string& source, const ClipBudget& budget)
+      : text_(text), source_(source), budget_(budget), tz_(text, source) {}
 
   BvhDocument parse() {
     hierarchy();
@@ -328,6 +328,12 @@ class Parser {
     }
     doc_.frame_time = dt;
     const int time_line = t.line;
+    // the budget, before a single frame is stored
+    if (const std::string why = clip_budget_refusal(budget_, frames, dt, numbers_per_frame());
+        !why.empty()) {
+      fail(frames_line,
+           "Frames: " + std::to_string(frames) + " at Frame Time " + num(dt) + " s: " + why);
+    }
 
     // the rest of the Frame Time line must be blank; the data starts on the next line
     const char* const begin = text_.data();
@@ -444,8 +450,24 @@ class Parser {
     return count;
   }
 
+  // numbers one frame costs: the file's values, or the imported configuration when that is
+  // larger (a free joint for the ROOT and for joints with position channels, a quaternion for
+  // every other joint; io/bvh_import.hpp)
+  std::int64_t numbers_per_frame() const {
+    std::int64_t coordinates = 0;
+    for (const BvhNode& n : doc_.nodes) {
+      if (n.is_end_site()) continue;
+      const bool moves = n.kind == BvhNode::Kind::kRoot ||
+                         std::any_of(n.channels.begin(), n.channels.end(),
+                                     [](BvhChannel c) { return !is_rotation(c); });
+      coordinates += moves ? 7 : 4;
+    }
+    return std::max<std::int64_t>(doc_.channels, coordinates);
+  }
+
   std::string_view text_;
   const std::string& source_;
+  const ClipBudget& budget_;
   Tokenizer tz_;
   BvhDocument doc_;
   std::vector<Open> stack_;
@@ -456,8 +478,10 @@ class Parser {
 
 }  // namespace
 
-BvhDocument parse_bvh(std::string_view text, const std::string& source_name) {
-  return Parser(text, source_name).parse();
+BvhDocument parse_bvh(std::string_view text,
+                      const std::string& source_name,
+                      const ClipBudget& budget) {
+  return Parser(text, source_name, budget).parse();
 }
 
 }  // namespace io

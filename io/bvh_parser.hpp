@@ -16,6 +16,10 @@
 // declared frames (boxing_toes_zxy.bvh declares 3069 frames and holds 3070 lines); it is ignored,
 // so the clip has the declared number of frames, as three.js and assimp read it.
 //
+// Budget: a document whose `Frames:` and `Frame Time:` declare a clip beyond `budget`
+// (io/clip_budget.hpp; frames × the larger of the file's channels and the imported
+// configuration's coordinates) is refused when the header is read, before any frame is stored.
+//
 // Memory: nothing is reserved from what the header claims. Frame storage is reserved only after
 // the first motion line, for at most as many frames as the remaining bytes can hold at that
 // line's length, so a 10⁹-frame header over a short file allocates nothing large.
@@ -25,11 +29,14 @@
 #include <string_view>
 
 #include "io/bvh_document.hpp"
+#include "io/clip_budget.hpp"
 
 namespace io {
 
 /// Parses BVH text; `source_name` starts every message.
-/// @throws ModelError "<source>: line <n>: <what> (rule: ...)"
-BvhDocument parse_bvh(std::string_view text, const std::string& source_name);
+/// @throws ModelError "<source>: line <n>: <what> (rule: ...)", also for a clip over `budget`
+BvhDocument parse_bvh(std::string_view text,
+                      const std::string& source_name,
+                      const ClipBudget& budget = {});
 
 }  // namespace io

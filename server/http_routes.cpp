@@ -89,6 +89,31 @@ bool server_key_ok(const RouteContext& ctx, const httplib::Request& req, httplib
   return false;
 }
 
+// largest frame index a request may name (thumbnail, export range)
+constexpr int kMaxFrameParam = 1'000'000'000;
+
+// the limits a client may want to know before it sends something (docs/protocol.md, "Limits")
+json limits_json(const UploadRules& r, std::size_t live_sessions) {
+  const UploadCaps& c = r.caps;
+  const animator::Limits& l = r.limits;
+  return {{"upload_bytes", c.largest()},
+          {"upload_bytes_by_type",
+           {{"urdf", c.urdf},
+            {"json", c.json},
+            {"bvh", c.bvh},
+            {"gltf", c.gltf},
+            {"fbx", c.fbx},
+            {"dae", c.dae}}},
+          {"ws_message_bytes", kMaxWsMessageBytes},
+          {"clip_seconds", l.max_clip_seconds},
+          {"clip_frames", l.max_clip_frames},
+          {"clip_values", l.max_clip_values},
+          {"keys", l.max_keys},
+          {"layers", l.max_layers},
+          {"undo_bytes", l.max_undo_bytes},
+          {"live_sessions", live_sessions}};
+}
+
 bool is_state_changing(const std::string& method) {
   return method == "POST" || method == "PUT" || method == "DELETE" || method == "PATCH";
 }
@@ -202,10 +227,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
               {{"protocol", kProtocolVersion},
                {"ws_url", "ws://" + host + ":" + std::to_string(ctx.policy->ws_port()) + "/ws"},
                {"create_needs_key", !ctx.server_key.empty()},
-               {"limits",
-                {{"upload_bytes", kMaxUploadBytes},
-                 {"ws_message_bytes", kMaxWsMessageBytes},
-                 {"live_sessions", ctx.registry->options().max_live}}}});
+               {"limits", limits_json(ctx.uploads, ctx.registry->options().max_live)}});
   });
   http.Get("/api/characters", [&ctx](const httplib::Request&, httplib::Response& res) {
     json list = json::array();
@@ -225,7 +247,8 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         if (!req.has_file("character"))
           return send_error(res, 400, "character: a file field \"character\" is required");
         const httplib::MultipartFormData file = req.get_file_value("character");
-        session = session_from_upload("character", file.filename, file.content, ctx.temp_root);
+        session = session_from_upload("character", file.filename, file.content, ctx.temp_root,
+                                      ctx.uploads);
       } else {
         if (req.body.size() > kMaxJsonBodyBytes)
           return send_error(res, 413, "body: larger than 1 MiB");
@@ -239,7 +262,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         }
         const std::string name = body["character"];
         if (!ctx.served_character_name.empty() && name == ctx.served_character_name) {
-          session = session_from_file(ctx.served_character_path, name);
+          session = session_from_file(ctx.served_character_path, name, ctx.uploads.limits);
         }
         bool bundled = session != nullptr;
         for (const auto& c : io::bundled_characters()) bundled = bundled || c.name == name;
@@ -275,8 +298,8 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         }
         try {
           const httplib::MultipartFormData file = req.get_file_value("clip");
-          core::Clip clip =
-              clip_from_upload("clip", file.filename, file.content, actor->model(), ctx.temp_root);
+          core::Clip clip = clip_from_upload("clip", file.filename, file.content, actor->model(),
+                                             ctx.temp_root, ctx.uploads);
           const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
           auto shared = std::make_shared<core::Clip>(std::move(clip));
           actor->call_within(
@@ -296,13 +319,24 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
     if (format != "bvh" && format != "gltf" && format != "glb") {
       return send_error(res, 400, "format: must be bvh, gltf or glb");
     }
+    std::optional<int> first, last;
+    try {
+      first = int_param(req, "first", res, 0, kMaxFrameParam);
+      last = int_param(req, "last", res, 0, kMaxFrameParam);
+    } catch (const std::invalid_argument&) {
+      return;
+    }
     struct Animation {
       core::Clip clip;
       std::string name;
       const core::SkinnedMesh* skin;
     };
-    const Animation a = actor->call_within(ctx.call_timeout, [](animator::Session& s) {
-      return Animation{s.animation_clip(), s.character(), s.skin()};
+    // only the frames asked for are sampled; the whole animation is refused when it is longer
+    // than the clip budget (a session restored from a file made under other limits)
+    const Animation a = actor->call_within(ctx.call_timeout, [first, last](animator::Session& s) {
+      const std::int64_t end = s.animation_frames() - 1;
+      return Animation{s.animation_clip(first.value_or(0), last.value_or(end)), s.character(),
+                       s.skin()};
     });
     const std::string file_name = safe_file_name(a.name, "animation") + "." + format;
     try {
@@ -327,7 +361,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
              if (!actor) return;
              std::optional<int> frame, size;
              try {
-               frame = int_param(req, "frame", res, 0, 10'000'000);
+               frame = int_param(req, "frame", res, 0, kMaxFrameParam);
                size = int_param(req, "size", res, 16, 1024);
              } catch (const std::invalid_argument&) {
                return;
@@ -335,13 +369,16 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
              struct Pose {
                Eigen::VectorXd q;
                const core::SkinnedMesh* skin;
-               int frames;
+               std::int64_t frames;
              };
+             // one frame, sampled from the clip, layers and keys directly
              const Pose pose = actor->call_within(ctx.call_timeout, [frame](animator::Session& s) {
                if (!frame) return Pose{s.q(), s.skin(), 0};
-               const core::Clip clip = s.animation_clip();
-               if (*frame >= clip.size()) return Pose{Eigen::VectorXd(), s.skin(), clip.size()};
-               return Pose{clip.frames[static_cast<size_t>(*frame)], s.skin(), clip.size()};
+               const std::int64_t frames = s.animation_frames();
+               if (*frame >= frames) return Pose{Eigen::VectorXd(), s.skin(), frames};
+               Pose p{Eigen::VectorXd(), s.skin(), frames};
+               s.animation_frame(*frame, p.q);
+               return p;
              });
              if (pose.q.size() == 0) {
                return send_error(res, 400,
@@ -373,8 +410,8 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
 
 void register_routes(httplib::Server& http, const RouteContext& context) {
   const RouteContext& ctx = context;
-  http.set_payload_max_length(kMaxUploadBytes +
-                              (std::size_t{1} << 16));  // the file plus its multipart framing
+  // the largest file plus its multipart framing; each file type's own cap is checked after
+  http.set_payload_max_length(ctx.uploads.caps.largest() + (std::size_t{1} << 16));
   http.set_keep_alive_timeout(1);  // shutdown waits for idle keep-alive connections
   http.set_pre_routing_handler([&ctx](const httplib::Request& req, httplib::Response& res) {
     if (!ctx.policy->host_allowed(req.get_header_value("Host"), ctx.policy->http_port())) {
@@ -398,9 +435,12 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
-  http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+  http.set_error_handler([&ctx](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return;
-    const std::string what = res.status == 413   ? "body: larger than the upload cap of 64 MiB"
+    const std::string too_large = "body: larger than the largest upload cap, " +
+                                  byte_text(ctx.uploads.caps.largest()) +
+                                  " (set by pindrag serve --max-upload-<type>)";
+    const std::string what = res.status == 413   ? too_large
                              : res.status == 404 ? "path: no such route"
                              : res.status == 405 ? "method: not allowed on this route"
                                                  : "request: refused";
@@ -426,6 +466,8 @@ void register_routes(httplib::Server& http, const RouteContext& context) {
             return send_error(res, 507, std::string("storage: ") + e.code().message());
           }
           what = e.what();
+        } catch (const animator::BudgetError& e) {
+          return send_error(res, 422, e.what());  // over a limit: names it and its setting
         } catch (const animator::SessionError& e) {
           return send_error(res, 400, e.what());
         } catch (const std::exception& e) {

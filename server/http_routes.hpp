@@ -12,6 +12,7 @@
 // Eigen's headers when they come later
 #include "server/security.hpp"
 #include "server/session_registry.hpp"
+#include "server/uploads.hpp"
 
 #include <httplib.h>
 
@@ -26,6 +27,7 @@ struct RouteContext {
   const HostPolicy* policy = nullptr;
   std::string web_root;   // the page: index.html, js/, css/ (node_modules/three for /vendor/three/)
   std::string temp_root;  // where uploads are unpacked (empty: the system's temporary folder)
+  UploadRules uploads;    // caps by file type and the budgets of what uploads bring
   // a character file chosen by the operator (`serve --character FILE`), offered by this name
   // besides the bundled ones; empty: none
   std::string served_character_name;

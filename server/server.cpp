@@ -77,8 +77,10 @@ std::string load_or_make_server_key(const std::string& data_dir) {
 struct Server::Impl {
   explicit Impl(const ServerOptions& o)
       : options(o),
-        registry(RegistryOptions{
-            .data_dir = o.data_dir, .max_live = o.max_live_sessions, .expire_days = o.expire_days}),
+        registry(RegistryOptions{.data_dir = o.data_dir,
+                                 .max_live = o.max_live_sessions,
+                                 .expire_days = o.expire_days,
+                                 .limits = o.limits}),
         policy(o.host, 0, 0),
         http(GateLimits{.header_timeout = o.header_timeout}),
         ws(registry, policy, o.header_timeout) {}
@@ -104,6 +106,9 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
   s.routes.call_timeout = options.call_timeout;
   if (!is_loopback_host(options.host))
     s.routes.server_key = load_or_make_server_key(options.data_dir);
+  if (const std::string e = animator::check_limits(options.limits); !e.empty())
+    throw std::runtime_error(e);
+  s.routes.uploads = UploadRules{options.uploads, options.limits};
   s.routes.web_root = options.web_root.empty() ? default_web_root() : options.web_root;
   if (!fs::is_regular_file(fs::path(s.routes.web_root) / "index.html")) {
     throw std::runtime_error("web root " + s.routes.web_root +
@@ -120,7 +125,8 @@ Server::Server(const ServerOptions& options) : impl_(std::make_unique<Impl>(opti
       throw std::runtime_error("--character " + options.character +
                                ": neither a bundled character nor a file");
     }
-    session_from_file(options.character, "check");  // throws naming the file when it does not load
+    // throws naming the file when it does not load or its clip is over the budget
+    session_from_file(options.character, "check", options.limits);
     s.routes.served_character_name =
         safe_file_name(fs::path(options.character).stem().string(), "character");
     s.routes.served_character_path = fs::absolute(options.character).string();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "server/session_registry.hpp"
+#include "server/uploads.hpp"
 
 namespace server {
 
@@ -29,6 +30,8 @@ struct ServerOptions {
   std::chrono::milliseconds call_timeout{10000};
   /// How long a connection may take to send a request header (HTTP) or upgrade (WebSocket).
   std::chrono::milliseconds header_timeout{5000};
+  animator::Limits limits;  // every session's budgets (animator/limits.hpp)
+  UploadCaps uploads;       // largest upload per file type
 };
 
 /// The page's folder: $PINDRAG_WEB_ROOT, else the source tree's web/ recorded at build time.

@@ -341,6 +341,7 @@ void SessionActor::tick() {
     ++stats_.ticks;
   }
   if (result.pose_changed) pose_dirty_ = true;
+  if (result.committed) after_edit();
   if (result.report && now - last_report_ >= std::chrono::milliseconds(100)) {
     last_report_ = now;
     broadcast_text(report_json(*result.report).dump());

@@ -29,7 +29,7 @@ SessionRegistry::SessionRegistry(RegistryOptions options)
 }
 
 SessionRegistry::SessionRegistry(std::string data_dir)
-    : SessionRegistry(RegistryOptions{.data_dir = std::move(data_dir)}) {}
+    : SessionRegistry(RegistryOptions{.data_dir = std::move(data_dir), .limits = {}}) {}
 
 SessionRegistry::~SessionRegistry() { stop_all(); }
 
@@ -62,6 +62,7 @@ std::shared_ptr<SessionActor> SessionRegistry::load(const std::string& id) {
   try {
     // the snapshot with the journal's later records replayed; what it drops goes to the log
     loaded = SessionJournal::load(path, std::cerr);
+    loaded.session->set_limits(options_.limits);
   } catch (const std::exception& e) {
     throw std::runtime_error("session " + id + ": its saved file does not load: " + e.what());
   }
@@ -100,6 +101,7 @@ void SessionRegistry::make_room(std::unique_lock<std::mutex>&) {
 }
 
 SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session) {
+  session->set_limits(options_.limits);
   SessionHandle handle{random_hex(16), random_hex(16), nullptr};
   {
     std::unique_lock lock(mutex_);

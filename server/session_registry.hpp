@@ -46,6 +46,7 @@ struct RegistryOptions {
   std::string data_dir;                    // empty: sessions live in memory only
   std::size_t max_live = kDefaultMaxLive;  // sessions in memory at once (at least 1)
   int expire_days = 0;                     // > 0: delete sessions untouched for that many days
+  animator::Limits limits{};               // every session created or loaded is held to these
 };
 
 struct SessionHandle {

@@ -79,38 +79,93 @@ std::string rename_source(std::string message,
   return message;
 }
 
+// the cap of a file type and the setting that changes it
+struct Cap {
+  std::size_t bytes;
+  const char* setting;
+};
+
+Cap cap_of(const UploadCaps& caps, const std::string& ext) {
+  if (ext == ".urdf") return {caps.urdf, "pindrag serve --max-upload-urdf"};
+  if (ext == ".json") return {caps.json, "pindrag serve --max-upload-json"};
+  if (ext == ".bvh") return {caps.bvh, "pindrag serve --max-upload-bvh"};
+  if (ext == ".gltf" || ext == ".glb") return {caps.gltf, "pindrag serve --max-upload-gltf"};
+  if (ext == ".fbx") return {caps.fbx, "pindrag serve --max-upload-fbx"};
+  return {caps.dae, "pindrag serve --max-upload-dae"};
+}
+
+void check_upload(const std::string& field,
+                  const std::string& shown,
+                  const std::string& ext,
+                  const std::string& bytes,
+                  const UploadCaps& caps) {
+  if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
+  const Cap cap = cap_of(caps, ext);
+  if (bytes.size() > cap.bytes) {
+    throw UploadError(413, field + ": \"" + shown + "\" is " + byte_text(bytes.size()) +
+                               ", over the upload cap of " + byte_text(cap.bytes) + " for " + ext +
+                               " files (set by " + cap.setting + ")");
+  }
+}
+
 bool same_skeleton(const core::Model& a, const core::Model& b) {
   return a.njoints == b.njoints && a.nq == b.nq && a.link_name == b.link_name &&
          a.joint_type == b.joint_type && a.parent == b.parent;
 }
 
+io::BvhImport load_bvh(const std::string& path, const animator::Limits& limits) {
+  io::BvhImportOptions options;
+  options.budget = animator::clip_budget(limits);
+  return io::load_bvh_file(path, options);
+}
+
+io::SkinnedImport load_skinned(const std::string& path, const animator::Limits& limits) {
+  io::ImportOptions options;
+  options.budget = animator::clip_budget(limits);
+  return io::import_skinned_file(path, io::ImportLimits{}, options);
+}
+
 }  // namespace
 
+std::size_t UploadCaps::largest() const { return std::max({urdf, json, bvh, gltf, fbx, dae}); }
+
+std::string byte_text(std::size_t bytes) {
+  constexpr std::size_t kMiB = std::size_t{1} << 20;
+  if (bytes >= kMiB && bytes % kMiB == 0) return std::to_string(bytes / kMiB) + " MiB";
+  return std::to_string(bytes) + " bytes";
+}
+
 std::unique_ptr<animator::Session> session_from_file(const std::string& path,
-                                                     const std::string& name) {
+                                                     const std::string& name,
+                                                     const animator::Limits& limits) {
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
-    io::BvhImport imported = io::load_bvh_file(path);
+    io::BvhImport imported = load_bvh(path, limits);
     auto session = std::make_unique<animator::Session>(imported.model, name);
+    session->set_limits(limits);
     if (imported.clip.size() > 1) session->set_clip(std::move(imported.clip), "import clip");
     return session;
   }
   if (is_assimp_format(ext)) {
-    io::SkinnedImport imported = io::import_skinned_file(path);
+    io::SkinnedImport imported = load_skinned(path, limits);
     auto session = std::make_unique<animator::Session>(imported.model, name);
+    session->set_limits(limits);
     session->set_skin(std::make_shared<const core::SkinnedMesh>(std::move(imported.mesh)));
     if (!imported.clips.empty() && imported.clips.front().clip.size() > 1) {
       session->set_clip(std::move(imported.clips.front().clip), "import clip");
     }
     return session;
   }
-  return std::make_unique<animator::Session>(io::load_model_file(path).model, name);
+  auto session = std::make_unique<animator::Session>(io::load_model_file(path).model, name);
+  session->set_limits(limits);
+  return session;
 }
 
 std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        const std::string& file_name,
                                                        const std::string& bytes,
-                                                       const std::string& temp_root) {
+                                                       const std::string& temp_root,
+                                                       const UploadRules& rules) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".urdf" && ext != ".json" && ext != ".bvh" && !is_assimp_format(ext)) {
@@ -118,11 +173,11 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
         415, field + ": \"" + shown +
                  "\": unsupported file type (rule: .urdf, .json, .bvh, .glb, .gltf, .fbx or .dae)");
   }
-  if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
+  check_upload(field, shown, ext, bytes, rules.caps);
   const std::string name = safe_file_name(fs::path(file_name).stem().string(), "character");
   TempUpload upload(temp_root, ext, bytes);
   try {
-    return session_from_file(upload.file(), name);
+    return session_from_file(upload.file(), name, rules.limits);
   } catch (const std::exception& e) {
     throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
   }
@@ -132,24 +187,25 @@ core::Clip clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
-                            const std::string& temp_root) {
+                            const std::string& temp_root,
+                            const UploadRules& rules) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".bvh" && !is_assimp_format(ext)) {
     throw UploadError(415, field + ": \"" + shown +
                                "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx or .dae)");
   }
-  if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
+  check_upload(field, shown, ext, bytes, rules.caps);
   TempUpload upload(temp_root, ext, bytes);
   std::shared_ptr<const core::Model> clip_model;
   core::Clip clip;
   try {
     if (ext == ".bvh") {
-      io::BvhImport imported = io::load_bvh_file(upload.file());
+      io::BvhImport imported = load_bvh(upload.file(), rules.limits);
       clip_model = imported.model;
       clip = std::move(imported.clip);
     } else {
-      io::SkinnedImport imported = io::import_skinned_file(upload.file());
+      io::SkinnedImport imported = load_skinned(upload.file(), rules.limits);
       if (imported.clips.empty())
         throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
       clip_model = imported.model;

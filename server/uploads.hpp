@@ -3,6 +3,7 @@
 // sandboxed child process), and removed; a client never names a path.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -12,6 +13,30 @@
 #include "core/clip.hpp"
 
 namespace server {
+
+/// Largest upload accepted per file type, in bytes; each is a `pindrag serve` setting
+/// (docs/protocol.md, "Limits"). Text formats that describe a character alone are small; files
+/// that carry motion or meshes get more room, and the clip budget bounds what their motion
+/// may cost once read.
+struct UploadCaps {
+  std::size_t urdf = std::size_t{4} << 20;   // --max-upload-urdf
+  std::size_t json = std::size_t{4} << 20;   // --max-upload-json (native character JSON)
+  std::size_t bvh = std::size_t{64} << 20;   // --max-upload-bvh
+  std::size_t gltf = std::size_t{64} << 20;  // --max-upload-gltf (.gltf and .glb)
+  std::size_t fbx = std::size_t{64} << 20;   // --max-upload-fbx
+  std::size_t dae = std::size_t{64} << 20;   // --max-upload-dae (COLLADA)
+  /// The largest of them: what the HTTP server reads of a request at most.
+  std::size_t largest() const;
+};
+
+/// What an upload is held to: its size by type, and the session's budgets for what it brings.
+struct UploadRules {
+  UploadCaps caps;
+  animator::Limits limits;
+};
+
+/// "64 MiB" for whole mebibytes, "1234 bytes" otherwise.
+std::string byte_text(std::size_t bytes);
 
 /// A file the server will not take; what() names the field and the rule. Maps to 4xx.
 class UploadError : public std::runtime_error {
@@ -23,24 +48,31 @@ class UploadError : public std::runtime_error {
 
 /// A new session named `name` from a character file on disk chosen by the operator (by
 /// extension: .urdf, .json, .bvh, .glb, .gltf, .fbx, .dae; a BVH or an animated skinned file also
-/// brings its first clip). @throws core::ModelError or std::runtime_error naming the file
+/// brings its first clip), held to `limits`: a clip beyond them is refused while its file is read.
+/// @throws core::ModelError or std::runtime_error naming the file
 std::unique_ptr<animator::Session> session_from_file(const std::string& path,
-                                                     const std::string& name);
+                                                     const std::string& name,
+                                                     const animator::Limits& limits = {});
 
 /// A new session from an uploaded character file (.urdf, .json, .bvh, .glb, .gltf, .fbx, .dae);
 /// a BVH or an animated glTF/FBX/COLLADA file also brings its first clip.
-/// `field` names the form field in messages. @throws UploadError
+/// `field` names the form field in messages. A file over its type's cap is refused with 413
+/// naming the cap and its setting; a clip over the budget with 422 naming the limit.
+/// @throws UploadError
 std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        const std::string& file_name,
                                                        const std::string& bytes,
-                                                       const std::string& temp_root);
+                                                       const std::string& temp_root,
+                                                       const UploadRules& rules = {});
 
 /// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae). The clip must fit
-/// `model` (same links, same joint types), else UploadError 422. @throws UploadError
+/// `model` (same links, same joint types), else UploadError 422; caps and budget as for
+/// session_from_upload. @throws UploadError
 core::Clip clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
-                            const std::string& temp_root);
+                            const std::string& temp_root,
+                            const UploadRules& rules = {});
 
 }  // namespace server

@@ -546,6 +546,18 @@ TEST(AssimpImport, ExportOfEachImportIsValidAndReproducesItsClip) {
   if (!why.empty()) std::printf("  validator and three.js checks skipped: %s\n", why.c_str());
 }
 
+// Expects the import of `path` with `options` to fail with a message holding `expected`.
+void expect_import_error_with(const std::string& path,
+                              const io::ImportOptions& options,
+                              const std::string& expected) {
+  try {
+    io::import_skinned_file(path, {}, options);
+    ADD_FAILURE() << path << ": imported without an error";
+  } catch (const core::ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+  }
+}
+
 // our export read back through assimp: human48 with a skinned mesh and a clip
 TEST(AssimpImport, OurOwnExportRoundTrips) {
   const auto m = core::build_human_figure({});
@@ -602,6 +614,47 @@ TEST(AssimpImport, OurOwnExportRoundTrips) {
       worst);
   EXPECT_LE(worst, 1e-5);
   for (double d : s.dropped_offset) EXPECT_LE(d, 1e-6);
+  expect_no_children();
+}
+
+// The file: a few kilobytes of glTF with a key at 33,000 s resampled into 990,001
+// frames. A clip budget refuses it from the key span, before resampling, naming the limit.
+TEST(AssimpImport, AnimationsBeyondTheClipBudgetAreRefusedBeforeResampling) {
+  const auto m = core::build_human_figure({});
+  core::Clip two_keys;
+  two_keys.frame_time = 33'000;  // keys at 0 s and 33,000 s
+  two_keys.frames = {core::neutral_configuration(*m), core::neutral_configuration(*m)};
+  gltf_test::TempDir dir;
+  io::GltfExportOptions stick;
+  stick.stick_figure = true;
+  const std::string path = dir.path("long.glb");
+  io::save_gltf_file(path, *m, &two_keys, nullptr, stick);
+  EXPECT_LT(std::filesystem::file_size(path), 64u * 1024);
+  io::ImportOptions options;
+  options.budget.max_seconds = 3600;
+  options.budget.seconds_setting = "pindrag serve --max-clip-seconds";
+  try {
+    io::import_skinned_file(path, {}, options);
+    ADD_FAILURE() << "imported";
+  } catch (const core::ModelError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("33000 s exceed the limit of 3600 s per clip (set by pindrag serve "
+                        "--max-clip-seconds)"),
+              std::string::npos)
+        << what;
+  }
+  // frames and numbers (frames × the imported model's coordinates) count too
+  core::Clip short_clip;
+  short_clip.frames.assign(90, core::neutral_configuration(*m));
+  io::save_gltf_file(dir.path("short.glb"), *m, &short_clip, nullptr, stick);
+  options = io::ImportOptions{};
+  options.budget.max_frames = 50;
+  expect_import_error_with(dir.path("short.glb"), options, "90 frames exceed the limit of 50");
+  options = io::ImportOptions{};
+  options.budget.max_values = 89 * 7;
+  expect_import_error_with(dir.path("short.glb"), options, "numbers per clip");
+  options.budget.max_values = std::int64_t{90} * 1000;
+  EXPECT_EQ(io::import_skinned_file(dir.path("short.glb"), {}, options).clips[0].clip.size(), 90);
   expect_no_children();
 }
 

@@ -469,6 +469,46 @@ TEST(BvhReader, HugeHeadersAllocateNothingTheDataDoesNotHold) {
   }
 }
 
+// A clip budget (io/clip_budget.hpp) is checked when the header is read: a file over it is
+// refused naming the limit and its setting, before one frame is stored.
+TEST(BvhReader, AClipOverTheBudgetIsRefusedAtItsHeader) {
+  const std::string head =
+      "HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
+      "JOINT a\n{\nOFFSET 0 1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n}\n}\nMOTION\n";
+  std::string frames;
+  for (int f = 0; f < 200'000; ++f) frames += "1 2 3 4 5 6\n";
+  const std::string text = head + "Frames: 200000\nFrame Time: 0.01\n" + frames;
+  io::ClipBudget budget;
+  budget.max_frames = 1000;
+  budget.frames_setting = "--max-clip-frames";
+  {
+    fixtures::AllocationCounter allocations;
+    expect_error([&] { io::parse_bvh(text, "long.bvh", budget); },
+                 {"long.bvh: line 13: Frames: 200000 at Frame Time 0.01 s",
+                  "200000 frames exceed the limit of 1000 frames per clip (set by "
+                  "--max-clip-frames)"});
+    EXPECT_LT(allocations.bytes(), 64 * 1024);  // the 200000 frames were never stored
+  }
+  // the length: 199999 × 0.01 s
+  budget = io::ClipBudget{};
+  budget.max_seconds = 60;
+  expect_error([&] { io::parse_bvh(text, "long.bvh", budget); },
+               {"1999.99 s exceed the limit of 60 s per clip"});
+  // the numbers: per frame the larger of the file's 6 values and the imported 7 + 4 coordinates
+  budget = io::ClipBudget{};
+  budget.max_values = 11 * 199'999;
+  budget.values_setting = "--max-clip-values";
+  expect_error([&] { io::parse_bvh(text, "long.bvh", budget); },
+               {"200000 frames × 11 numbers = 2200000 numbers exceed the limit of 2199989",
+                "(set by --max-clip-values)"});
+  budget.max_values = 11 * 200'000;
+  EXPECT_EQ(io::parse_bvh(text, "long.bvh", budget).frames, 200'000);  // exactly the limit
+  // load_bvh_string passes its options' budget to the reader
+  io::BvhImportOptions options;
+  options.budget.max_frames = 10;
+  expect_error([&] { io::load_bvh_string(text, "long.bvh", options); }, {"limit of 10 frames"});
+}
+
 TEST(BvhReader, TenMegabyteLinesAreRefusedWithoutCopying) {
   const std::string big(10 << 20, '7');
   const std::string head =
