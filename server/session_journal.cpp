@@ -162,15 +162,19 @@ bool SessionJournal::snapshot_if_due(bool settled) {
   }
   if (records == 0) return false;
   const auto now = std::chrono::steady_clock::now();
-  const bool due = records >= kSnapshotRecords || bytes >= kSnapshotBytes ||
-                   (settled && now - last_snapshot_ >= kSnapshotInterval);
+  const bool waited = now - last_snapshot_ >= kSnapshotInterval;
+  // after a failed snapshot (a full disk) the next one waits too, whatever the journal holds
+  const bool large = records >= kSnapshotRecords || bytes >= kSnapshotBytes;
+  const bool due = (large && (waited || !snapshot_failed_)) || (settled && waited);
   if (!due) return false;
   last_snapshot_ = now;
   snapshot_running_ = true;
   snapshot_thread_ = std::thread([this, image = durable_] {
+    snapshot_failed_ = false;
     try {
       write_snapshot(image);
     } catch (const std::exception& e) {
+      snapshot_failed_ = true;
       // nothing is lost: the journal still holds every record
       std::cerr << "pindrag serve: " << session_path_ << ": snapshot not written: " << e.what()
                 << "\n";

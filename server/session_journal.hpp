@@ -35,7 +35,7 @@ class SessionJournal {
  public:
   /// A snapshot starts when the figure settles and the previous one started at least
   /// kSnapshotInterval ago, and at once when the journal holds kSnapshotRecords records or
-  /// kSnapshotBytes bytes.
+  /// kSnapshotBytes bytes (after a failed one, only once kSnapshotInterval has passed).
   static constexpr std::chrono::seconds kSnapshotInterval{5};
   static constexpr std::size_t kSnapshotRecords = 200;
   static constexpr std::uint64_t kSnapshotBytes = std::uint64_t{16} << 20;
@@ -85,6 +85,7 @@ class SessionJournal {
   void snapshot_now();
   /// Snapshots written since this journal was opened.
   std::uint64_t snapshots() const { return snapshots_; }
+  bool snapshot_running() const { return snapshot_running_; }
   /// What the journal file holds now.
   std::size_t journal_records() const;
   std::uint64_t journal_bytes() const;
@@ -104,6 +105,7 @@ class SessionJournal {
 
   std::thread snapshot_thread_;
   std::atomic<bool> snapshot_running_{false};
+  std::atomic<bool> snapshot_failed_{false};  // the last one: then the next waits its interval
   std::atomic<std::uint64_t> snapshots_{0};
   std::chrono::steady_clock::time_point last_snapshot_{};
 };

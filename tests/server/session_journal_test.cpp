@@ -310,6 +310,48 @@ TEST(SessionJournal, SessionFilesAndJournalsAreOwnerOnly) {
   EXPECT_EQ(journal->journal_bytes(), 0u);
 }
 
+TEST(SessionJournal, SnapshotsRunInTheBackgroundAndWaitAfterAFailure) {
+  TempDir dir;
+  const std::string path = dir.file("s.json");
+  animator::Session live(human(), "human48");
+  auto journal = SessionJournal::start(path, live);
+  auto edit_many = [&] {
+    for (std::size_t k = 0; k < SessionJournal::kSnapshotRecords; ++k) {
+      live.key_insert(0.1 * static_cast<double>(live.keys().keys().size()));
+      ASSERT_TRUE(journal->record(live, json{{"type", "key_insert"}}));
+    }
+  };
+  auto finished = [&] {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (journal->snapshot_running() && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return !journal->snapshot_running();
+  };
+  edit_many();
+  EXPECT_TRUE(journal->snapshot_if_due(/*settled=*/false));  // 200 records: due at once
+  ASSERT_TRUE(finished());
+  EXPECT_EQ(journal->snapshots(), 1u);
+  EXPECT_EQ(journal->journal_records(), 0u);
+  EXPECT_EQ(reload(path), document_of(live));
+
+  edit_many();
+  {
+    FileSizeLimit full(0);  // the snapshot cannot be written; the journal keeps everything
+    EXPECT_TRUE(journal->snapshot_if_due(/*settled=*/false));
+    ASSERT_TRUE(finished());
+    EXPECT_EQ(journal->snapshots(), 1u);
+    EXPECT_EQ(journal->journal_records(), SessionJournal::kSnapshotRecords);
+    // a failed snapshot is not retried at once, however large the journal
+    EXPECT_FALSE(journal->snapshot_if_due(/*settled=*/false));
+    EXPECT_FALSE(journal->snapshot_if_due(/*settled=*/true));
+  }
+  EXPECT_EQ(reload(path), document_of(live));
+  journal->snapshot_now();
+  EXPECT_EQ(journal->journal_records(), 0u);
+  EXPECT_EQ(reload(path), document_of(live));
+}
+
 // --- the actor --------------------------------------------------------------------------------
 
 class Recorder final : public server::SessionSubscriber {
