@@ -1,5 +1,7 @@
 #include "server/session_journal.hpp"
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <iostream>
 #include <system_error>
@@ -69,6 +71,8 @@ SessionJournal::Loaded SessionJournal::load(const std::string& session_path, std
   std::uint64_t snapshot_seq = 0;
   Loaded out;
   out.session = animator::load_session(session_path, &snapshot_seq);
+  // a session file written before they were private (0644) becomes so now
+  ::chmod(session_path.c_str(), 0600);
   const std::string path = journal_path(session_path);
   io::JournalContents contents;
   try {

@@ -308,6 +308,11 @@ TEST(SessionJournal, SessionFilesAndJournalsAreOwnerOnly) {
   EXPECT_EQ(mode_of(path), 0600u);
   EXPECT_EQ(mode_of(SessionJournal::journal_path(path)), 0600u);
   EXPECT_EQ(journal->journal_bytes(), 0u);
+  // a session saved before files were private is made so when it loads
+  journal.reset();
+  ::chmod(path.c_str(), 0644);
+  reload(path);
+  EXPECT_EQ(mode_of(path), 0600u);
 }
 
 TEST(SessionJournal, SnapshotsRunInTheBackgroundAndWaitAfterAFailure) {
