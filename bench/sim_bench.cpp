@@ -61,10 +61,8 @@ Eigen::VectorXd standing() {
   return sim::place_on_ground(m, core::rest_configuration(m), sim::GroundPlane{});
 }
 
-void step_ours(benchmark::State& state, const sim::Scene& scene) {
-  sim::World world;
-  world.add_body("human48", figure(), standing());
-  world.set_scene(scene);
+// Times world.step(), restarting from the world's present state every kRestartEvery steps.
+void time_steps(benchmark::State& state, sim::World& world) {
   const sim::World start = world;
   int k = 0;
   for (auto _ : state) {
@@ -76,6 +74,13 @@ void step_ours(benchmark::State& state, const sim::Scene& scene) {
     world.step();
   }
   state.counters["contacts"] = static_cast<double>(world.contact_points().size());
+}
+
+void step_ours(benchmark::State& state, const sim::Scene& scene) {
+  sim::World world;
+  world.add_body("human48", figure(), standing());
+  world.set_scene(scene);
+  time_steps(state, world);
 }
 
 std::string mjcf_path(bool self_collision) {
@@ -153,17 +158,7 @@ void step_pinned(benchmark::State& state) {
   const int hand = m.link_index("l_hand");
   problem.add(ik::LinkTask{.role = ik::kDrag, .link = hand, .target_W = data.X_W[hand].p});
   world.set_pin_problem(0, problem);
-  const sim::World start = world;
-  int k = 0;
-  for (auto _ : state) {
-    if (++k % kRestartEvery == 0) {
-      state.PauseTiming();
-      world = start;
-      state.ResumeTiming();
-    }
-    world.step();
-  }
-  state.counters["contacts"] = static_cast<double>(world.contact_points().size());
+  time_steps(state, world);
 }
 
 const bool registered = [] {

@@ -154,7 +154,7 @@ void AccelerationSolver::split_root(const core::Data& data,
   Hbb_ = data.M.topLeftCorner<6, 6>();
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(Hbb_);
   X_ = data.M.topRightCorner(6, n_);
-  llt.solveInPlace(X_);
+  if (n_ > 0) llt.solveInPlace(X_);  // a body without joints has no coupling to solve
   y_ = Q.head<6>() - bias.head<6>();
   llt.solveInPlace(y_);
 }

@@ -11,6 +11,27 @@
 
 namespace sim {
 
+namespace {
+
+// Height above the plane of the lowest point of one shape placed at X_WS (the support along −n).
+double shape_height(const LinkShape& s, const core::Transform& X_WS, const GroundPlane& ground) {
+  const core::Vector3& n = ground.normal;
+  double h = n.dot(X_WS.p - ground.point);
+  switch (s.kind) {
+    case LinkShape::Kind::kSphere:
+      return h - s.radius;
+    case LinkShape::Kind::kCapsule:
+      return h - s.radius - s.half_length * std::abs(n.dot(X_WS.R.col(2)));
+    case LinkShape::Kind::kBox:
+      // the support of a box along −n: Σ h_k |n · axis_k|
+      for (int k = 0; k < 3; ++k) h -= s.half_extents[k] * std::abs(n.dot(X_WS.R.col(k)));
+      return h;
+  }
+  return h;
+}
+
+}  // namespace
+
 double lowest_point_height(const core::Model& model,
                            const Eigen::VectorXd& q,
                            const GroundPlane& ground) {
@@ -18,24 +39,9 @@ double lowest_point_height(const core::Model& model,
   core::forward_kinematics(model, data, q);
   const BodyShapes shapes = build_body_shapes(model, q);
   double lowest = std::numeric_limits<double>::infinity();
-  const core::Vector3& n = ground.normal;
   for (int i = 1; i < model.njoints; ++i) {
     for (const LinkShape& s : shapes.shapes[i]) {
-      const core::Transform X_WS = data.X_W[i] * s.X_LinkShape;
-      double h = n.dot(X_WS.p - ground.point);
-      switch (s.kind) {
-        case LinkShape::Kind::kSphere:
-          h -= s.radius;
-          break;
-        case LinkShape::Kind::kCapsule:
-          h -= s.radius + s.half_length * std::abs(n.dot(X_WS.R.col(2)));
-          break;
-        case LinkShape::Kind::kBox:
-          // the support of a box along −n: Σ h_k |n · axis_k|
-          for (int k = 0; k < 3; ++k) h -= s.half_extents[k] * std::abs(n.dot(X_WS.R.col(k)));
-          break;
-      }
-      lowest = std::min(lowest, h);
+      lowest = std::min(lowest, shape_height(s, data.X_W[i] * s.X_LinkShape, ground));
     }
   }
   return lowest;
@@ -51,22 +57,9 @@ double link_height(const std::vector<LinkShape>& shapes,
                    const LinkShape** box) {
   double lowest = std::numeric_limits<double>::infinity();
   *box = nullptr;
-  const core::Vector3& n = ground.normal;
   for (const LinkShape& s : shapes) {
-    const core::Transform X_WS = X_WL * s.X_LinkShape;
-    double h = n.dot(X_WS.p - ground.point);
-    switch (s.kind) {
-      case LinkShape::Kind::kSphere:
-        h -= s.radius;
-        break;
-      case LinkShape::Kind::kCapsule:
-        h -= s.radius + s.half_length * std::abs(n.dot(X_WS.R.col(2)));
-        break;
-      case LinkShape::Kind::kBox:
-        for (int k = 0; k < 3; ++k) h -= s.half_extents[k] * std::abs(n.dot(X_WS.R.col(k)));
-        if (h < lowest || !*box) *box = &s;
-        break;
-    }
+    const double h = shape_height(s, X_WL * s.X_LinkShape, ground);
+    if (s.kind == LinkShape::Kind::kBox && (h < lowest || !*box)) *box = &s;
     lowest = std::min(lowest, h);
   }
   return lowest;
