@@ -163,6 +163,22 @@ json frame_json(const sim::World& w) {
 
 }  // namespace
 
+sim::Scene read_effects(io::JsonFields& f, const io::JsonField& effects) {
+  std::vector<std::string> names;
+  if (!effects) return {};
+  f.array(effects, 16, "effects");
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const std::string name = f.string(effects[k]);
+    if (!sim::effect_from_string(name)) {
+      f.fail(effects[k], io::in_quotes(name) +
+                             " is not an effect (rule: one of gravity, ground_contact, "
+                             "friction, hard_limits, self_collision, dynamic_pins)");
+    }
+    names.push_back(name);
+  }
+  return sim::Scene::from_names(names);
+}
+
 SimulationRun read_simulation_scene(const json& doc) {
   return io::rethrow_as<RequestError>([&] {
     JsonFields f = request_fields();
@@ -200,20 +216,7 @@ SimulationRun read_simulation_scene(const json& doc) {
         }
       }
     }
-    std::vector<std::string> names;
-    if (const JsonField effects = root["effects"]) {
-      f.array(effects, 16, "effects");
-      for (std::size_t k = 0; k < effects.size(); ++k) {
-        const std::string name = f.string(effects[k]);
-        if (!sim::effect_from_string(name)) {
-          f.fail(effects[k], io::in_quotes(name) +
-                                 " is not an effect (rule: one of gravity, ground_contact, "
-                                 "friction, hard_limits, self_collision, dynamic_pins)");
-        }
-        names.push_back(name);
-      }
-    }
-    world.set_scene(sim::Scene::from_names(names));
+    world.set_scene(read_effects(f, root["effects"]));
     run.duration = f.number_or(root["duration"], run.duration, {0, kMaxDuration});
     run.record_every = static_cast<int>(f.integer_or(root["record_every"], 10, 1, 1'000'000));
     return run;

@@ -5,6 +5,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "io/json_reader.hpp"
+#include "sim/scene.hpp"
 #include "sim/world.hpp"
 
 namespace cli {
@@ -14,6 +16,10 @@ struct SimulationRun {
   double duration = 1.0;  // simulated seconds
   int record_every = 10;  // steps between recorded frames
 };
+
+/// The scene of an "effects" array of sim::Effect names (absent: no effect); an unknown name
+/// fails naming its element. Shared by scene files and `pindrag solve` requests.
+sim::Scene read_effects(io::JsonFields& f, const io::JsonField& effects);
 
 /// @throws RequestError naming the field and the rule
 SimulationRun read_simulation_scene(const nlohmann::json& scene);

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "animator/document_json.hpp"
 #include "cli/json_fields.hpp"
+#include "cli/simulate_scene.hpp"
 #include "cli/solve_physics.hpp"
 #include "cli/solve_spec.hpp"
 #include "core/configuration.hpp"
@@ -27,21 +29,6 @@ using nlohmann::json;
 const std::initializer_list<std::string_view> kRequestKeys = {
     "character", "frames",           "dt",    "settings", "drag",      "drags",
     "pins",      "joint_references", "start", "effects",  "physics_dt"};
-const std::initializer_list<std::string_view> kSettingsKeys = {
-    "damping",
-    "iterations",
-    "gains",
-    "damping_schedule",
-    "manipulability_threshold",
-    "top_damping",
-    "top_singular_value",
-    "range_damping",
-    "max_position_error",
-    "max_orientation_error",
-    "limit_margin",
-    "max_joint_step",
-    "joint_weights",
-};
 
 int link_by_name(JsonFields& f, const JsonField& field, const core::Model& m) {
   const std::string name = f.string(field);
@@ -59,44 +46,15 @@ ik::TaskMode mode_from(JsonFields& f, const JsonField& mode, ik::TaskMode fallba
   return *m;
 }
 
-void read_gains(JsonFields& f, const JsonField& g, ik::SolverSettings& s) {
-  f.object(g);
-  f.refuse_unknown_keys(g, {"drag", "pin", "reference", "limit", "range"});
-  s.drag_gain = f.number_or(g["drag"], s.drag_gain);
-  s.pin_gain = f.number_or(g["pin"], s.pin_gain);
-  s.reference_gain = f.number_or(g["reference"], s.reference_gain);
-  s.limit_gain = f.number_or(g["limit"], s.limit_gain);
-  s.range_gain = f.number_or(g["range"], s.range_gain);
-}
-
+// The request's "dt" and its "settings" object (the session file's reader, animator/document_json);
+// the frame time is the request's own, so "settings.dt" is refused.
 ik::SolverSettings settings_from(JsonFields& f, const JsonField& r) {
   ik::SolverSettings s;
   s.dt = f.number_or(r["dt"], s.dt);
   const JsonField j = r["settings"];
   if (!j) return s;
-  f.object(j);
-  f.refuse_unknown_keys(j, kSettingsKeys);
-  s.damping = f.number_or(j["damping"], s.damping);
-  s.iterations = static_cast<int>(f.integer_or(j["iterations"], s.iterations, 1, 1000));
-  if (const JsonField d = j["damping_schedule"]) {
-    const std::string name = f.string(d);
-    const auto schedule = ik::damping_schedule_from_string(name);
-    if (!schedule) {
-      f.fail(d, io::in_quotes(name) + " is not constant, manipulability or residual");
-    }
-    s.damping_schedule = *schedule;
-  }
-  s.manipulability_threshold =
-      f.number_or(j["manipulability_threshold"], s.manipulability_threshold);
-  s.top_damping = f.number_or(j["top_damping"], s.top_damping);
-  s.top_singular_value = f.number_or(j["top_singular_value"], s.top_singular_value);
-  s.range_damping = f.number_or(j["range_damping"], s.range_damping);
-  s.max_position_error = f.number_or(j["max_position_error"], s.max_position_error);
-  s.max_orientation_error = f.number_or(j["max_orientation_error"], s.max_orientation_error);
-  s.limit_margin = f.number_or(j["limit_margin"], s.limit_margin);
-  s.max_joint_step = f.number_or(j["max_joint_step"], s.max_joint_step);
-  s.use_joint_weights = f.boolean_or(j["joint_weights"], s.use_joint_weights);
-  if (const JsonField g = j["gains"]) read_gains(f, g, s);
+  animator::read_settings(f, j, s);
+  if (const JsonField dt = j["dt"]) f.fail(dt, "unknown key (the frame time is the request's dt)");
   if (const std::string e = ik::validate(s); !e.empty()) f.fail(j, e);
   return s;
 }
@@ -192,21 +150,7 @@ Eigen::VectorXd start_from(JsonFields& f, const JsonField& start, const core::Mo
 // standing on the ground (sim::standing_configuration), so that pins default to where the points
 // are there. A field that would change nothing on the chosen path is refused.
 void read_physics(JsonFields& f, const JsonField& r, SolveSpec& out) {
-  std::vector<std::string> names;
-  const JsonField effects = r["effects"];
-  if (effects) {
-    f.array(effects, 16, "effects");
-    for (std::size_t k = 0; k < effects.size(); ++k) {
-      const std::string name = f.string(effects[k]);
-      if (!sim::effect_from_string(name)) {
-        f.fail(effects[k], io::in_quotes(name) +
-                               " is not an effect (rule: one of gravity, ground_contact, "
-                               "friction, hard_limits, self_collision, dynamic_pins)");
-      }
-      names.push_back(name);
-    }
-  }
-  out.scene = sim::Scene::from_names(names);
+  out.scene = read_effects(f, r["effects"]);
   if (!out.physics()) {
     if (r["physics_dt"]) f.fail(r["physics_dt"], "applies only with effects");
     return;
@@ -218,8 +162,8 @@ void read_physics(JsonFields& f, const JsonField& r, SolveSpec& out) {
   const core::Model& m = *out.model;
   if ((out.scene.ground_contact || out.scene.dynamic_pins) &&
       m.joint_type[1] != core::JointType::kFree) {
-    f.fail(effects, "ground_contact and dynamic_pins need a free root joint; character '" + m.name +
-                        "' has a " + core::to_string(m.joint_type[1]) + " root");
+    f.fail(r["effects"], "ground_contact and dynamic_pins need a free root joint; character '" +
+                             m.name + "' has a " + core::to_string(m.joint_type[1]) + " root");
   }
   if (out.scene.ground_contact) out.q = sim::standing_configuration(m, out.q, {});
 }
