@@ -6,9 +6,8 @@
 #include <limits>
 
 #include "cli/json_fields.hpp"
-#include "cli/support_polygon.hpp"
-#include "core/com.hpp"
 #include "core/kinematics.hpp"
+#include "sim/balance.hpp"
 #include "sim/world.hpp"
 
 namespace cli {
@@ -20,41 +19,11 @@ using nlohmann::json;
 
 json point(const Vector3& p) { return {p.x(), p.y(), p.z()}; }
 
-// The environment's push on the body: total force and moment about the origin, world axes.
-struct GroundReaction {
-  Vector3 force = Vector3::Zero();
-  Vector3 moment = Vector3::Zero();
-};
+json point_or_null(const std::optional<Vector3>& p) { return p ? point(*p) : json(nullptr); }
 
-GroundReaction ground_reaction(const sim::World& world) {
-  GroundReaction g;
-  for (const sim::ContactPair& p : world.contact_pairs()) {
-    if (p.partner_body != -1) continue;  // self contact: internal
-    const Vector3 f = p.wrench.tail<3>();
-    g.force += f;
-    g.moment += p.wrench.head<3>() + p.ref_W.cross(f);
-  }
-  return g;
-}
-
-// The centre of pressure on the plane through o with normal n: the point c of the plane about
-// which the reaction's moment is along n, c = o + n × M_o / (n · F) (for n = +y:
-// c_x = M_z / F_y, c_z = −M_x / F_y). Null when nothing presses on the ground.
-json center_of_pressure(const GroundReaction& g, const sim::GroundPlane& ground) {
-  const Vector3 n = ground.normal.normalized();
-  const double fn = n.dot(g.force);
-  if (!(fn > 1e-9)) return nullptr;
-  const Vector3 m_o = g.moment - ground.point.cross(g.force);
-  return point(ground.point + n.cross(m_o) / fn);
-}
-
-json support_polygon_of(const sim::World& world, const sim::GroundPlane& ground) {
-  std::vector<Vector3> points;
-  for (const sim::ContactPoint& p : world.contact_points()) {
-    if (p.key.partner_body == -1 && p.key.env == 0) points.push_back(p.p_W);
-  }
+json points(const std::vector<Vector3>& polygon) {
   json out = json::array();
-  for (const Vector3& v : support_polygon(points, ground)) out.push_back(point(v));
+  for (const Vector3& v : polygon) out.push_back(point(v));
   return out;
 }
 
@@ -79,14 +48,13 @@ void add_task_errors(const SolveSpec& s, const core::Data& data, json& frame) {
 json measure_frame(const SolveSpec& s, const sim::World& world, core::Data& data) {
   const core::Model& m = *s.model;
   core::forward_kinematics(m, data, world.body(0).q);
-  const sim::GroundPlane& ground = world.environment().ground;
-  const GroundReaction g = ground_reaction(world);
+  const sim::BalanceMeasures b = sim::measure_balance(world, 0, m, data);
   const ik::AccelerationSolver* pins = world.pin_solver(0);
   json frame;
-  frame["com"] = point(core::center_of_mass(m, data));
-  frame["cop"] = center_of_pressure(g, ground);
-  frame["support_polygon"] = support_polygon_of(world, ground);
-  frame["contact_force"] = std::max(0.0, ground.normal.normalized().dot(g.force));
+  frame["com"] = point(b.com);
+  frame["cop"] = point_or_null(b.cop);
+  frame["support_polygon"] = points(b.polygon);
+  frame["contact_force"] = b.normal_force;
   frame["base_residual"] = s.scene.dynamic_pins && pins ? pins->report().root_residual : 0.0;
   frame["pelvis"] = point(data.X_W[1].p);
   add_task_errors(s, data, frame);

@@ -10,10 +10,10 @@
 
 #include "cli/json_fields.hpp"
 #include "cli/solve_request.hpp"
-#include "cli/support_polygon.hpp"
 #include "core/configuration.hpp"
 #include "io/bundled_characters.hpp"
 #include "sim/placement.hpp"
+#include "sim/support_polygon.hpp"
 
 namespace {
 
@@ -90,7 +90,7 @@ TEST(SolvePhysics, StandingFigureKeepsItsCenterOfPressureInsideItsSupportPolygon
       EXPECT_NEAR(cop.y(), 0, 1e-12) << "on the ground";
       const std::vector<Vector3> polygon = polygon_of(f["support_polygon"]);
       ASSERT_GE(polygon.size(), 3u);
-      EXPECT_TRUE(cli::inside_polygon(polygon, cop, {}, 2e-3)) << f.dump();
+      EXPECT_TRUE(sim::inside_polygon(polygon, cop, {}, 2e-3)) << f.dump();
       if (k >= 10) {
         EXPECT_NEAR(f["contact_force"].get<double>(), weight, 0.05 * weight);
       }
@@ -121,7 +121,7 @@ TEST(SolvePhysics, DragActsThroughDynamicPins) {
     EXPECT_LT(f["base_residual"].get<double>(), 1e-9);
     ASSERT_FALSE(f["cop"].is_null());
     EXPECT_TRUE(
-        cli::inside_polygon(polygon_of(f["support_polygon"]), vector_of(f["cop"]), {}, 2e-3));
+        sim::inside_polygon(polygon_of(f["support_polygon"]), vector_of(f["cop"]), {}, 2e-3));
   }
 }
 
@@ -203,7 +203,7 @@ TEST(SolvePhysics, WithoutEffectsTheFramesKeepTheirFields) {
 TEST(SupportPolygon, HullIsCounterClockwiseSeenFromAbove) {
   const std::vector<Vector3> points = {{0, -0.01, 0},  {1, 0, 0},   {1, 0.02, -1}, {0, 0, -1},
                                        {0.5, 0, -0.5}, {0.5, 0, 0}, {1, 0, 0}};
-  const std::vector<Vector3> hull = cli::support_polygon(points, {});
+  const std::vector<Vector3> hull = sim::support_polygon(points, {});
   ASSERT_EQ(hull.size(), 4u);  // interior, edge and repeated points dropped
   double twice_area = 0;       // about +y: (z x − x z) summed
   for (std::size_t i = 0; i < hull.size(); ++i) {
@@ -213,26 +213,26 @@ TEST(SupportPolygon, HullIsCounterClockwiseSeenFromAbove) {
     twice_area += a.z() * b.x() - a.x() * b.z();
   }
   EXPECT_NEAR(twice_area, 2.0, 1e-12);  // positive: counter-clockwise seen from +y
-  EXPECT_TRUE(cli::inside_polygon(hull, {0.5, 0.3, -0.5}, {}, 0));
-  EXPECT_TRUE(cli::inside_polygon(hull, {1.001, 0, -0.5}, {}, 2e-3));
-  EXPECT_FALSE(cli::inside_polygon(hull, {1.01, 0, -0.5}, {}, 2e-3));
-  EXPECT_FALSE(cli::inside_polygon({}, {0, 0, 0}, {}, 1));
+  EXPECT_TRUE(sim::inside_polygon(hull, {0.5, 0.3, -0.5}, {}, 0));
+  EXPECT_TRUE(sim::inside_polygon(hull, {1.001, 0, -0.5}, {}, 2e-3));
+  EXPECT_FALSE(sim::inside_polygon(hull, {1.01, 0, -0.5}, {}, 2e-3));
+  EXPECT_FALSE(sim::inside_polygon({}, {0, 0, 0}, {}, 1));
 }
 
 TEST(SupportPolygon, CollinearPointsGiveASegmentAndATiltedPlaneWorks) {
-  const std::vector<Vector3> line = cli::support_polygon({{0, 0, 0}, {1, 0, 0}, {0.5, 0, 0}}, {});
+  const std::vector<Vector3> line = sim::support_polygon({{0, 0, 0}, {1, 0, 0}, {0.5, 0, 0}}, {});
   ASSERT_EQ(line.size(), 2u);
-  EXPECT_TRUE(cli::inside_polygon(line, {0.5, 0, 0.001}, {}, 2e-3));
-  EXPECT_FALSE(cli::inside_polygon(line, {1.5, 0, 0}, {}, 2e-3));
+  EXPECT_TRUE(sim::inside_polygon(line, {0.5, 0, 0.001}, {}, 2e-3));
+  EXPECT_FALSE(sim::inside_polygon(line, {1.5, 0, 0}, {}, 2e-3));
   sim::GroundPlane tilted;
   tilted.normal = Vector3(1, 1, 0).normalized();
   tilted.point = Vector3(0, 1, 0);
   const std::vector<Vector3> square = {
       {0, 1, 0}, {0, 1, 1}, {-1, 2, 0}, {-1, 2, 1}, {-0.5, 1.5, 0.5}};
-  const std::vector<Vector3> hull = cli::support_polygon(square, tilted);
+  const std::vector<Vector3> hull = sim::support_polygon(square, tilted);
   ASSERT_EQ(hull.size(), 4u);
   for (const Vector3& p : hull) EXPECT_NEAR((p - tilted.point).dot(tilted.normal), 0, 1e-12);
-  EXPECT_TRUE(cli::inside_polygon(hull, Vector3(-0.5, 1.5, 0.5) + tilted.normal, tilted, 0));
+  EXPECT_TRUE(sim::inside_polygon(hull, Vector3(-0.5, 1.5, 0.5) + tilted.normal, tilted, 0));
 }
 
 }  // namespace

@@ -1,10 +1,10 @@
-#include "cli/support_polygon.hpp"
+#include "sim/support_polygon.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
-namespace cli {
+namespace sim {
 
 namespace {
 
@@ -17,7 +17,7 @@ constexpr double kSame = 1e-9;  // m: points closer than this are one
 // seen from above the ground.
 struct PlaneAxes {
   Vector3 origin, n, u, w;
-  explicit PlaneAxes(const sim::GroundPlane& g) : origin(g.point), n(g.normal.normalized()) {
+  explicit PlaneAxes(const GroundPlane& g) : origin(g.point), n(g.normal.normalized()) {
     const Vector3 a = std::abs(n.x()) < 0.9 ? Vector3::UnitX() : Vector3::UnitZ();
     u = (a - a.dot(n) * n).normalized();
     w = n.cross(u);
@@ -64,7 +64,7 @@ double distance_to_segment(const Point& p, const Point& a, const Point& b) {
 }  // namespace
 
 std::vector<Vector3> support_polygon(const std::vector<Vector3>& points,
-                                     const sim::GroundPlane& ground) {
+                                     const GroundPlane& ground) {
   const PlaneAxes axes(ground);
   std::vector<Point> flat;
   flat.reserve(points.size());
@@ -76,7 +76,7 @@ std::vector<Vector3> support_polygon(const std::vector<Vector3>& points,
 
 bool inside_polygon(const std::vector<Vector3>& polygon,
                     const Vector3& point,
-                    const sim::GroundPlane& ground,
+                    const GroundPlane& ground,
                     double tolerance) {
   if (polygon.empty()) return false;
   const PlaneAxes axes(ground);
@@ -94,4 +94,4 @@ bool inside_polygon(const std::vector<Vector3>& polygon,
   return true;
 }
 
-}  // namespace cli
+}  // namespace sim

@@ -7,19 +7,19 @@
 #include "core/spatial.hpp"
 #include "sim/environment.hpp"
 
-namespace cli {
+namespace sim {
 
 /// The convex hull of `points` projected onto `ground`, counter-clockwise seen from the side the
 /// normal points to; collinear and repeated points (within 1e-9 m) dropped. Fewer than three
 /// vertices when the points are fewer or collinear (a point, a segment).
 std::vector<core::Vector3> support_polygon(const std::vector<core::Vector3>& points,
-                                           const sim::GroundPlane& ground);
+                                           const GroundPlane& ground);
 
 /// `point` projected onto `ground` lies inside the convex `polygon` (as support_polygon returns
 /// it) or within `tolerance` (m) of it. False for an empty polygon.
 bool inside_polygon(const std::vector<core::Vector3>& polygon,
                     const core::Vector3& point,
-                    const sim::GroundPlane& ground,
+                    const GroundPlane& ground,
                     double tolerance);
 
-}  // namespace cli
+}  // namespace sim

@@ -1,0 +1,59 @@
+#include "sim/balance.hpp"
+
+#include <algorithm>
+
+#include "core/com.hpp"
+#include "sim/support_polygon.hpp"
+#include "sim/world.hpp"
+
+namespace sim {
+
+using core::Vector3;
+
+namespace {
+constexpr double kSupportTolerance = 0.01;  // m
+}
+
+GroundReaction ground_reaction(const World& world, int body) {
+  GroundReaction g;
+  for (const ContactPair& p : world.contact_pairs()) {
+    if (p.body != body || p.partner_body != -1) continue;  // another body's, or self contact
+    const Vector3 f = p.wrench.tail<3>();
+    g.force += f;
+    g.moment += p.wrench.head<3>() + p.ref_W.cross(f);
+  }
+  return g;
+}
+
+std::optional<Vector3> center_of_pressure(const GroundReaction& g, const GroundPlane& ground) {
+  const Vector3 n = ground.normal.normalized();
+  const double fn = n.dot(g.force);
+  if (!(fn > 1e-9)) return std::nullopt;
+  const Vector3 m_o = g.moment - ground.point.cross(g.force);
+  return ground.point + n.cross(m_o) / fn;
+}
+
+std::vector<Vector3> support_polygon_of(const World& world, int body) {
+  std::vector<Vector3> points;
+  for (const ContactPoint& p : world.contact_points()) {
+    if (p.key.body == body && p.key.partner_body == -1 && p.key.env == 0) points.push_back(p.p_W);
+  }
+  return support_polygon(points, world.environment().ground);
+}
+
+BalanceMeasures measure_balance(const World& world,
+                                int body,
+                                const core::Model& model,
+                                core::Data& data) {
+  const GroundPlane& ground = world.environment().ground;
+  const GroundReaction g = ground_reaction(world, body);
+  BalanceMeasures b;
+  b.com = core::center_of_mass(model, data);
+  b.cop = center_of_pressure(g, ground);
+  b.polygon = support_polygon_of(world, body);
+  b.normal_force = std::max(0.0, ground.normal.normalized().dot(g.force));
+  b.com_supported = b.cop && inside_polygon(b.polygon, b.com, ground, kSupportTolerance);
+  return b;
+}
+
+}  // namespace sim

@@ -1,0 +1,51 @@
+// Balance measures of a body standing on the ground plane: the ground's push on it (total force
+// and moment), its centre of pressure, its support polygon and whether its centre of mass
+// projects inside that polygon. Read by `pindrag solve`, the page and the balance feedback of the
+// dynamics-backed pins.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "core/data.hpp"
+#include "core/model.hpp"
+#include "core/spatial.hpp"
+#include "sim/environment.hpp"
+
+namespace sim {
+
+class World;
+
+/// The ground plane's push on body b: total force and moment about the world origin.
+struct GroundReaction {
+  core::Vector3 force = core::Vector3::Zero();
+  core::Vector3 moment = core::Vector3::Zero();
+};
+GroundReaction ground_reaction(const World& world, int body);
+
+/// The centre of pressure on the plane through o with normal n: the point c of the plane about
+/// which the reaction's moment is along n, c = o + n × M_o / (n · F) (for n = +y:
+/// c_x = M_z / F_y, c_z = −M_x / F_y). Empty when nothing presses on the ground.
+std::optional<core::Vector3> center_of_pressure(const GroundReaction& reaction,
+                                                const GroundPlane& ground);
+
+/// The convex hull of body b's contact points with the ground plane, on the plane.
+std::vector<core::Vector3> support_polygon_of(const World& world, int body);
+
+struct BalanceMeasures {
+  core::Vector3 com = core::Vector3::Zero();
+  std::optional<core::Vector3> cop;    // empty when not pressing on the ground
+  std::vector<core::Vector3> polygon;  // support polygon (fewer than 3 points: a point, a line)
+  double normal_force = 0;             // N, along the ground's normal, never negative
+  /// The centre of mass projects inside the support polygon (within 1 cm). False in the air.
+  bool com_supported = false;
+};
+
+/// Balance measures of body b; `data` holds its kinematics (core::forward_kinematics) already; its
+/// centre-of-mass fields are updated.
+BalanceMeasures measure_balance(const World& world,
+                                int body,
+                                const core::Model& model,
+                                core::Data& data);
+
+}  // namespace sim
