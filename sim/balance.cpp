@@ -25,12 +25,21 @@ GroundReaction ground_reaction(const World& world, int body) {
   return g;
 }
 
-std::optional<Vector3> center_of_pressure(const GroundReaction& g, const GroundPlane& ground) {
+std::optional<Vector3> center_of_pressure(const World& world, int body) {
+  const GroundPlane& ground = world.environment().ground;
   const Vector3 n = ground.normal.normalized();
-  const double fn = n.dot(g.force);
-  if (!(fn > 1e-9)) return std::nullopt;
-  const Vector3 m_o = g.moment - ground.point.cross(g.force);
-  return ground.point + n.cross(m_o) / fn;
+  double total = 0;
+  Vector3 sum = Vector3::Zero();
+  for (const ContactPair& p : world.contact_pairs()) {
+    if (p.body != body || p.partner_body != -1) continue;
+    const double fn = n.dot(p.wrench.tail<3>());
+    if (!(fn > 0)) continue;
+    const Vector3 o = p.ref_W - n * n.dot(p.ref_W - ground.point);
+    sum += fn * (o + n.cross(p.wrench.head<3>()) / fn);
+    total += fn;
+  }
+  if (!(total > 1e-9)) return std::nullopt;
+  return Vector3(sum / total);
 }
 
 std::vector<Vector3> support_polygon_of(const World& world, int body) {
@@ -49,7 +58,7 @@ BalanceMeasures measure_balance(const World& world,
   const GroundReaction g = ground_reaction(world, body);
   BalanceMeasures b;
   b.com = core::center_of_mass(model, data);
-  b.cop = center_of_pressure(g, ground);
+  b.cop = center_of_pressure(world, body);
   b.polygon = support_polygon_of(world, body);
   b.normal_force = std::max(0.0, ground.normal.normalized().dot(g.force));
   b.com_supported = b.cop && inside_polygon(b.polygon, b.com, ground, kSupportTolerance);

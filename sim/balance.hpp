@@ -23,11 +23,13 @@ struct GroundReaction {
 };
 GroundReaction ground_reaction(const World& world, int body);
 
-/// The centre of pressure on the plane through o with normal n: the point c of the plane about
-/// which the reaction's moment is along n, c = o + n × M_o / (n · F) (for n = +y:
-/// c_x = M_z / F_y, c_z = −M_x / F_y). Empty when nothing presses on the ground.
-std::optional<core::Vector3> center_of_pressure(const GroundReaction& reaction,
-                                                const GroundPlane& ground);
+/// The centre of pressure of body b on the ground plane: the mean of its ground pairs' own centres
+/// of pressure weighted by their normal forces. A pair's is c = o + n × M / (n · F), with o its
+/// reference point projected onto the plane and M its moment about the reference (for n = +y:
+/// c_x = o_x + M_z / F_y, c_z = o_z − M_x / F_y). Taken pair by pair, the friction of points a
+/// millimetre deep does not shift it off the contact points as one moment about a point of the
+/// plane would. Empty when nothing presses on the ground.
+std::optional<core::Vector3> center_of_pressure(const World& world, int body);
 
 /// The convex hull of body b's contact points with the ground plane, on the plane.
 std::vector<core::Vector3> support_polygon_of(const World& world, int body);

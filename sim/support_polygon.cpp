@@ -74,6 +74,23 @@ std::vector<Vector3> support_polygon(const std::vector<Vector3>& points,
   return out;
 }
 
+Vector3 polygon_centroid(const std::vector<Vector3>& polygon, const GroundPlane& ground) {
+  const PlaneAxes axes(ground);
+  Point mean = Point::Zero();
+  for (const Vector3& v : polygon) mean += axes.flat(v);
+  mean /= static_cast<double>(std::max<std::size_t>(polygon.size(), 1));
+  // the shoelace formula over triangles fanned from the mean
+  double area = 0;
+  Point moment = Point::Zero();
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Point a = axes.flat(polygon[i]), b = axes.flat(polygon[(i + 1) % polygon.size()]);
+    const double t = 0.5 * cross(mean, a, b);
+    area += t;
+    moment += t * (mean + a + b) / 3.0;
+  }
+  return axes.lift(area > 1e-12 ? Point(moment / area) : mean);
+}
+
 bool inside_polygon(const std::vector<Vector3>& polygon,
                     const Vector3& point,
                     const GroundPlane& ground,

@@ -15,6 +15,11 @@ namespace sim {
 std::vector<core::Vector3> support_polygon(const std::vector<core::Vector3>& points,
                                            const GroundPlane& ground);
 
+/// The centroid of the area of `polygon` (as support_polygon returns it), on the plane; the mean
+/// of its points when it has no area (a point, a segment).
+core::Vector3 polygon_centroid(const std::vector<core::Vector3>& polygon,
+                               const GroundPlane& ground);
+
 /// `point` projected onto `ground` lies inside the convex `polygon` (as support_polygon returns
 /// it) or within `tolerance` (m) of it. False for an empty polygon.
 bool inside_polygon(const std::vector<core::Vector3>& polygon,

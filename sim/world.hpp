@@ -31,6 +31,7 @@
 #include "core/osim.hpp"
 #include "ik/acceleration_solver.hpp"
 #include "ik/problem.hpp"
+#include "sim/balance_control.hpp"
 #include "sim/collision.hpp"
 #include "sim/contact_dynamics.hpp"
 #include "sim/environment.hpp"
@@ -92,6 +93,11 @@ class World {
   /// The problem of body i, to move its targets between steps; nullptr when it has none.
   ik::Problem* pin_problem(int i);
   void set_pin_settings(const ik::AccelerationSettings& settings);
+  /// The balance feedback of dynamically pinned bodies (sim/balance_control.hpp); on by default.
+  void set_balance_settings(const BalanceSettings& settings);
+  const BalanceSettings& balance_settings() const { return balance_settings_; }
+  /// What the balance feedback of body i did in its last step.
+  const BalanceState& balance_state(int i) const { return work_.at(i).balance.state(); }
   /// The solver of body i after its last dynamic-pins step (torques, report); nullptr when none.
   const ik::AccelerationSolver* pin_solver(int i) const;
 
@@ -153,6 +159,8 @@ class World {
     Eigen::VectorXd contact_force;
     core::FrameJacobian handle_jacobian;
     bool pinned = false;  // its accelerations came from the pins this step
+    BalanceFeedback balance;
+    ik::Problem balanced_pins;  // the pins with the balance feedback's targets
     explicit Work(const core::Model& m) : data(m) {}
     Work(const Work& o);
     Work& operator=(const Work& o);
@@ -206,6 +214,7 @@ class World {
   std::vector<ContactPair> implicit_pairs_;  // the pairs solved implicitly (no pinned body)
   std::vector<int> implicit_index_;          // their indices in pairs_
   ik::AccelerationSettings pin_settings_;
+  BalanceSettings balance_settings_;
   Eigen::MatrixXd Phi_;
   Eigen::VectorXd free_acceleration_;
   // hard limits: rows, H⁻¹ columns and impulses

@@ -31,7 +31,9 @@ World::Work::Work(const Work& o)
       pin_solver(o.pin_solver ? std::make_shared<ik::AccelerationSolver>(*o.pin_solver) : nullptr),
       contact_force(o.contact_force),
       handle_jacobian(o.handle_jacobian),
-      pinned(o.pinned) {}
+      pinned(o.pinned),
+      balance(o.balance),
+      balanced_pins(o.balanced_pins) {}
 
 World::Work& World::Work::operator=(const Work& o) {
   if (this != &o) *this = Work(o);
@@ -66,6 +68,12 @@ void World::set_pin_settings(const ik::AccelerationSettings& settings) {
   for (Work& w : work_) {
     if (w.pin_solver) w.pin_solver->set_settings(settings);
   }
+}
+
+void World::set_balance_settings(const BalanceSettings& settings) {
+  const std::string error = validate(settings);
+  if (!error.empty()) throw SimError(error);
+  balance_settings_ = settings;
 }
 
 const ik::AccelerationSolver* World::pin_solver(int i) const {
@@ -109,8 +117,9 @@ void World::run_dynamic_pins() {
     contact_joint_forces(b);
     w.bias = core::bias_forces(m, w.data, body.q, body.v);
     core::crba(m, w.data, body.q);
+    w.balance.update(*this, b, m, w.data, body.v, balance_settings_, *w.pins, w.balanced_pins);
     const ik::AccelerationReport& r =
-        w.pin_solver->solve(*w.pins, w.data, body.q, body.v, w.bias, w.contact_force);
+        w.pin_solver->solve(w.balanced_pins, w.data, body.q, body.v, w.bias, w.contact_force);
     if (r.status != ik::AccelerationReport::Status::kOk) continue;  // passive this step
     w.acceleration = w.pin_solver->acceleration();
     v_next_[b] = body.v + h * w.acceleration;

@@ -1,0 +1,296 @@
+// The dynamics-backed pin in the book's example (Yamane §9.4): human48 standing in soft contact
+// with weak orientation pins on both feet, its left hand dragged down. Every step is checked:
+// contacts push and never pull, the centre of pressure stays in the support polygon, and the
+// root's six rows of the equation of motion are met by the contact forces alone.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "core/configuration.hpp"
+#include "core/data.hpp"
+#include "core/human_figure.hpp"
+#include "core/kinematics.hpp"
+#include "ik/solver.hpp"
+#include "sim/balance.hpp"
+#include "sim/placement.hpp"
+#include "sim/support_polygon.hpp"
+#include "sim/world.hpp"
+
+namespace {
+
+using core::Vector3;
+
+constexpr double kDragSeconds = 2.5;
+
+std::shared_ptr<const core::Model> human48() {
+  static const auto m = core::build_human_figure({});
+  return m;
+}
+
+Eigen::VectorXd standing_pose(const core::Model& m) {
+  return sim::standing_configuration(m, core::neutral_configuration(m), {});
+}
+
+// Pelvis, hand and feet of human48 standing; the drag target moves down `depth` over 2.5 s.
+struct Drag94 {
+  std::shared_ptr<const core::Model> model = human48();
+  Eigen::VectorXd q0 = standing_pose(*model);
+  core::Data data{*model};
+  int hand = model->link_index("l_hand");
+  int feet[2] = {model->link_index("l_foot"), model->link_index("r_foot")};
+  Vector3 hand0, pelvis0;
+  double depth = 0.1;
+
+  explicit Drag94(double d) : depth(d) {
+    core::forward_kinematics(*model, data, q0);
+    hand0 = data.X_W[hand].p;
+    pelvis0 = data.X_W[1].p;
+  }
+  Vector3 target(double t) const {
+    return hand0 - Vector3(0, depth * std::min(t / kDragSeconds, 1.0), 0);
+  }
+  Vector3 velocity(double t) const {
+    return t < kDragSeconds ? Vector3(0, -depth / kDragSeconds, 0) : Vector3::Zero();
+  }
+  ik::LinkTask drag_task() const {
+    ik::LinkTask d;
+    d.role = ik::kDrag;
+    d.link = hand;
+    d.target_W = hand0;
+    return d;
+  }
+  // weak orientation-only pins on the feet, as in the book
+  void add_foot_pins(ik::Problem& p) const {
+    for (const int foot : feet) {
+      ik::LinkTask pin;
+      pin.role = ik::kPin;
+      pin.link = foot;
+      pin.mode = ik::TaskMode::kOrientation;
+      pin.target_R_W = core::Quaternion(data.X_W[foot].R);
+      p.add(pin);
+    }
+  }
+  void add_joint_references(ik::Problem& p) const {
+    for (int j = 2; j < model->njoints; ++j) {
+      ik::JointReferenceTask r;
+      r.joint = j;
+      if (model->joint_type[j] == core::JointType::kSpherical) {
+        r.R_ref = core::quaternion_at(q0, model->idx_q[j]);
+      } else {
+        r.q_ref = q0[model->idx_q[j]];
+      }
+      p.add(r);
+    }
+  }
+};
+
+std::string polygon_text(const std::vector<Vector3>& polygon) {
+  std::string out;
+  for (const Vector3& p : polygon) {
+    out += "(" + std::to_string(p.x()) + ", " + std::to_string(p.z()) + ") ";
+  }
+  return out;
+}
+
+// The world of the example: gravity, soft contact with friction, dynamics-backed pins.
+struct DynamicDrag : Drag94 {
+  sim::World world;
+  int drag_id = 0;
+
+  explicit DynamicDrag(double d, bool balance = true) : Drag94(d), world(settings()) {
+    world.add_body("figure", model, q0);
+    sim::Scene scene;
+    scene.gravity = scene.ground_contact = scene.friction = scene.dynamic_pins = true;
+    world.set_scene(scene);
+    sim::BalanceSettings b;
+    b.enabled = balance;
+    world.set_balance_settings(b);
+    ik::Problem problem;
+    add_foot_pins(problem);
+    add_joint_references(problem);
+    drag_id = problem.add(drag_task());
+    world.set_pin_problem(0, problem);
+  }
+  sim::WorldSettings settings() const {
+    sim::WorldSettings s;
+    s.contact = sim::figure_contact_settings(model->total_mass());
+    return s;
+  }
+  void move_drag() {
+    if (auto* d = world.pin_problem(0)->get<ik::LinkTask>(drag_id)) {
+      d->target_W = target(world.time());
+      d->velocity_W = velocity(world.time());
+    }
+  }
+  // the drag ends; the joints keep the posture it made (their references move to it), as a
+  // posing tool keeps the pose a drag leaves
+  void release() {
+    ik::Problem* p = world.pin_problem(0);
+    p->remove(drag_id);
+    const Eigen::VectorXd& q = world.body(0).q;
+    for (ik::Problem::Entry& e : p->entries()) {
+      if (auto* r = std::get_if<ik::JointReferenceTask>(&e.task)) {
+        if (model->joint_type[r->joint] == core::JointType::kSpherical) {
+          r->R_ref = core::quaternion_at(q, model->idx_q[r->joint]);
+        } else {
+          r->q_ref = q[model->idx_q[r->joint]];
+        }
+      }
+    }
+  }
+  const Vector3& pelvis() {
+    core::forward_kinematics(*model, data, world.body(0).q);
+    return data.X_W[1].p;
+  }
+  double foot_normal_force(int foot) const {
+    double f = 0;
+    for (const sim::ContactPair& p : world.contact_pairs()) {
+      if (p.partner_body == -1 && p.link == foot) f += p.wrench[4];
+    }
+    return f;
+  }
+  // the checks of every step
+  void step_checked() {
+    move_drag();
+    world.step();
+    ASSERT_LT(world.pin_solver(0)->report().root_residual, 1e-9) << "t " << world.time();
+    for (const sim::ContactPair& p : world.contact_pairs()) {
+      ASSERT_GE(p.wrench[4], -1e-9) << "a contact pulls at t " << world.time();
+    }
+    ASSERT_TRUE(world.body(0).q.allFinite() && world.body(0).v.allFinite());
+    core::forward_kinematics(*model, data, world.body(0).q);
+    const sim::BalanceMeasures b = sim::measure_balance(world, 0, *model, data);
+    if (b.cop) {
+      // within 2 mm: friction at the points' depth (≈ 1 mm) shifts the CoP by up to μ times that
+      ASSERT_TRUE(sim::inside_polygon(b.polygon, *b.cop, world.environment().ground, 2e-3))
+          << "the CoP leaves the support polygon at t " << world.time() << " (" << b.polygon.size()
+          << " vertices, CoP " << b.cop->transpose() << ", polygon " << polygon_text(b.polygon)
+          << ")";
+    }
+  }
+  bool standing() {
+    core::forward_kinematics(*model, data, world.body(0).q);
+    return data.X_W[1].p.y() > pelvis0.y() - 0.15;
+  }
+};
+
+// The velocity-level solver on the same scripted drag, feet pinned in place, 60 frames a second.
+double kinematic_pelvis_shift(double depth) {
+  Drag94 k(depth);
+  ik::Problem problem;
+  for (const int foot : k.feet) {
+    ik::LinkTask pin;
+    pin.role = ik::kPin;
+    pin.link = foot;
+    pin.mode = ik::TaskMode::kPose;
+    pin.target_W = k.data.X_W[foot].p;
+    pin.target_R_W = core::Quaternion(k.data.X_W[foot].R);
+    problem.add(pin);
+  }
+  const int drag = problem.add(k.drag_task());
+  ik::SolverSettings settings;
+  settings.dt = 1.0 / 60;
+  ik::Solver solver(*k.model, settings);
+  Eigen::VectorXd q = k.q0;
+  for (int frame = 1; frame <= 150; ++frame) {
+    auto* d = problem.get<ik::LinkTask>(drag);
+    d->target_W = k.target(frame / 60.0);
+    d->velocity_W = k.velocity(frame / 60.0);
+    solver.step(problem, k.data, q);
+  }
+  core::forward_kinematics(*k.model, k.data, q);
+  return k.data.X_W[1].p.x() - k.pelvis0.x();
+}
+
+// §9.4: the hand (on +x) is pulled down; the pelvis moves the other way, clearly more than the
+// kinematic solver moves it, and the figure keeps both feet on the ground.
+TEST(WeightShift, PelvisMovesAwayFromThePulledHand) {
+  DynamicDrag f(0.1);
+  ASSERT_GT(f.hand0.x(), f.pelvis0.x()) << "the left hand is on +x";
+  while (f.world.time() < kDragSeconds) {
+    ASSERT_NO_FATAL_FAILURE(f.step_checked());
+    ASSERT_GE(f.foot_normal_force(f.feet[0]), 0.0);
+    ASSERT_GE(f.foot_normal_force(f.feet[1]), 0.0);
+  }
+  const double dynamic_shift = f.pelvis().x() - f.pelvis0.x();
+  const double kinematic_shift = kinematic_pelvis_shift(0.1);
+  std::printf("pelvis shift after 2.5 s: dynamic %.1f mm, kinematic %.1f mm\n",
+              1e3 * dynamic_shift, 1e3 * kinematic_shift);
+  EXPECT_LT(dynamic_shift, -0.03) << "the pelvis moves away from the hand";
+  EXPECT_LT(dynamic_shift, 2 * kinematic_shift - 0.02) << "clearly more than the kinematic pelvis";
+  EXPECT_TRUE(f.standing());
+  EXPECT_EQ(f.world.balance_state(0).supports, 2) << "both feet carry the figure";
+}
+
+// Without the balance feedback the weak foot pins hold the feet flat and nothing moves the
+// centre of pressure: the same drag tips the figure over (the book: "once a figure fails to keep
+// balanced, it never recovers").
+TEST(WeightShift, WithoutBalanceFeedbackTheSameDragTipsTheFigure) {
+  DynamicDrag f(0.1, false);
+  bool fell = false;
+  while (f.world.time() < 4.0 && !fell) {
+    ASSERT_NO_FATAL_FAILURE(f.step_checked());
+    fell = !f.standing();
+  }
+  EXPECT_TRUE(fell);
+}
+
+// A drag the figure cannot follow standing (0.3 m down in 2.5 s) makes it fall honestly: every
+// step's contacts push, the root rows hold, nothing explodes.
+TEST(WeightShift, ADragThatTipsTheFigureMakesItFallHonestly) {
+  DynamicDrag f(0.3);
+  while (f.world.time() < 5.0) ASSERT_NO_FATAL_FAILURE(f.step_checked());
+  const Eigen::VectorXd& v = f.world.body(0).v;
+  EXPECT_LT(v.tail(v.size() - 6).cwiseAbs().maxCoeff(), 25.0 + 1e-9) << "joint speeds bounded";
+}
+
+// Standing with nothing dragged for 10 s, the figure gains no energy it was not given and comes
+// to rest (the joints' torques could inject energy; the balance feedback must not).
+TEST(WeightShift, StandingFigureGainsNoEnergy) {
+  DynamicDrag f(0.0);
+  f.release();
+  while (f.world.time() < 1.0) ASSERT_NO_FATAL_FAILURE(f.step_checked());  // settled on its feet
+  const double e0 = f.world.energy();
+  double highest = e0;
+  while (f.world.time() < 11.0) {
+    ASSERT_NO_FATAL_FAILURE(f.step_checked());
+    highest = std::max(highest, f.world.energy());
+  }
+  std::printf("energy after settling %.3f J, highest after %.3f J, at 10 s %.3f J\n", e0, highest,
+              f.world.energy());
+  EXPECT_LT(highest, e0 + 0.5);
+  EXPECT_TRUE(f.standing());
+  EXPECT_LT(f.world.kinetic_energy(0), 0.1);
+}
+
+// The pelvis dragged up with nothing to stand on: the joints cannot move the centre of mass, so
+// the drag is out of reach; the figure falls with gravity, finite, its joint speeds bounded.
+TEST(WeightShift, PelvisLiftedWithNoContactStaysFiniteAndBounded) {
+  Drag94 d(0);
+  sim::World world;
+  world.add_body("figure", d.model, d.q0);
+  sim::Scene scene;
+  scene.gravity = scene.dynamic_pins = true;
+  world.set_scene(scene);
+  ik::Problem problem;
+  d.add_joint_references(problem);
+  ik::LinkTask lift;
+  lift.role = ik::kDrag;
+  lift.link = 1;
+  lift.target_W = d.pelvis0 + Vector3(0, 0.5, 0);
+  problem.add(lift);
+  world.set_pin_problem(0, problem);
+  for (int i = 0; i < 3000; ++i) {
+    world.step();
+    ASSERT_TRUE(world.body(0).q.allFinite() && world.body(0).v.allFinite()) << "step " << i;
+    ASSERT_LT(world.pin_solver(0)->report().root_residual, 1e-9);
+    const Eigen::VectorXd& v = world.body(0).v;
+    const double joint_speed = v.tail(v.size() - 6).cwiseAbs().maxCoeff();
+    ASSERT_LE(joint_speed, 25.0 + 1e-9) << "step " << i;
+  }
+}
+
+}  // namespace
