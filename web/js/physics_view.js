@@ -20,7 +20,7 @@ function overlay(material) {
 function makeGroundMarks() {
   const plane = new THREE.Mesh(
     new THREE.PlaneGeometry(8, 8),
-    new THREE.MeshBasicMaterial({ color: COLORS.plane, transparent: true, opacity: 0.18, depthWrite: false, side: THREE.DoubleSide }),
+    new THREE.MeshBasicMaterial({ color: COLORS.plane, transparent: true, opacity: 0.3, depthWrite: false, side: THREE.DoubleSide }),
   );
   plane.rotation.x = -Math.PI / 2;
   plane.name = 'physics-ground';
