@@ -9,7 +9,8 @@ namespace animator {
 void Session::sync_physics(bool restart) {
   if (!simulates(doc_.scene)) {
     // kinematic posing resumes at the document's pose: where the last tick left the figure
-    // (no jump), or the pose an undo restored
+    // (no jump), or the pose an undo restored; pins do not pull it anywhere until the next edit
+    if (physics_) settling_ = false;
     physics_.reset();
     return;
   }
