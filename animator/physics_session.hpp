@@ -31,10 +31,10 @@ struct ContactArrow {
 /// What the page draws while physics runs.
 struct PhysicsMeasures {
   core::Vector3 com = core::Vector3::Zero();
-  std::optional<core::Vector3> cop;             // empty when nothing presses on the ground
-  std::vector<core::Vector3> support_polygon;   // on the ground plane
-  std::vector<ContactArrow> contacts;           // ground contact pairs of the figure
-  bool balanced = false;                        // the centre of mass over the support polygon
+  std::optional<core::Vector3> cop;            // empty when nothing presses on the ground
+  std::vector<core::Vector3> support_polygon;  // on the ground plane
+  std::vector<ContactArrow> contacts;          // ground contact pairs of the figure
+  bool balanced = false;                       // the centre of mass over the support polygon
   /// Microseconds each effect cost during the last advance (one displayed frame), by
   /// sim::kAllEffects order, and all of the world's steps together.
   std::array<double, sim::kEffectCount> effect_us{};
@@ -73,7 +73,7 @@ class PhysicsSession {
   std::shared_ptr<const core::Model> model_;
   sim::World world_;
   Eigen::VectorXd reference_;
-  mutable core::Data data_;  // scratch of measures()
+  mutable core::Data data_;        // scratch of measures()
   sim::StageTimers frame_timers_;  // the last advance's
   ik::Problem problem_;
 };
