@@ -45,6 +45,7 @@ void Session::apply_document(const Document& doc) {
   solver_->set_settings(doc_.settings);
   settling_ = false;
   refresh_kinematics();
+  sync_physics(/*restart=*/true);
 }
 
 void Session::restore(Document doc, const Playback& playback) {
@@ -90,6 +91,7 @@ void Session::set_pose(const Eigen::VectorXd& q) {
   const Document before = doc_;
   doc_.q = q;
   refresh_kinematics();
+  sync_physics(/*restart=*/true);
   commit(before, "set pose");
 }
 
@@ -101,7 +103,7 @@ void Session::drag_begin(int link,
   check_link(link);
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
-  const bool in_motion = playback_.playing && doc_.clip && doc_.clip->size() > 1;
+  const bool in_motion = playback_.playing && doc_.clip && doc_.clip->size() > 1 && !physics_;
   if (in_motion && static_cast<int>(doc_.layers.size()) >= limits_.max_layers) {
     throw BudgetError("the session has " + std::to_string(doc_.layers.size()) +
                       " edit layers, the most it may hold (set by " + kMaxLayersSetting +
@@ -201,6 +203,7 @@ void Session::set_solver_settings(const ik::SolverSettings& s) {
 void Session::set_scene(const sim::Scene& scene) {
   const Document before = doc_;
   doc_.scene = scene;
+  sync_physics(/*restart=*/false);
   commit(before, "scene effects");
 }
 
@@ -293,7 +296,9 @@ void Session::finish_motion_edit() {
 // --- time
 // ------------------------------------------------------------------------------------------
 
-bool Session::needs_tick() const { return playback_.playing || drag_.has_value() || settling_; }
+bool Session::needs_tick() const {
+  return playback_.playing || drag_.has_value() || settling_ || physics_ != nullptr;
+}
 
 void Session::rebuild_problem() {
   problem_.clear();
@@ -306,18 +311,23 @@ void Session::rebuild_problem() {
                               .mode = p.mode});
   }
   if (drag_) {
-    ik::LinkTask d{.role = ik::kDrag,
-                   .link = drag_->link,
-                   .p_LinkPoint = drag_->p_LinkPoint,
-                   .target_W = drag_->target_W};
+    ik::LinkTask d = drag_task();
     // feed-forward: the target's motion since the last step (Yamane eq. 8.8)
     d.velocity_W = (drag_->target_W - drag_->previous_target_W) / doc_.settings.dt;
-    if (drag_->rotation) {
-      d.target_R_W = *drag_->rotation;
-      d.mode = ik::TaskMode::kPose;
-    }
     problem_.add(d);
   }
+}
+
+ik::LinkTask Session::drag_task() const {
+  ik::LinkTask d{.role = ik::kDrag,
+                 .link = drag_->link,
+                 .p_LinkPoint = drag_->p_LinkPoint,
+                 .target_W = drag_->target_W};
+  if (drag_->rotation) {
+    d.target_R_W = *drag_->rotation;
+    d.mode = ik::TaskMode::kPose;
+  }
+  return d;
 }
 
 bool Session::solve_step() {
@@ -345,14 +355,7 @@ bool Session::edit_in_motion(double t, TickResult& result) {
     if (static_cast<int>(doc_.layers.size()) >= limits_.max_layers) return false;
     start_motion_edit();
   }
-  ik::LinkTask d{.role = ik::kDrag,
-                 .link = drag_->link,
-                 .p_LinkPoint = drag_->p_LinkPoint,
-                 .target_W = drag_->target_W};
-  if (drag_->rotation) {
-    d.target_R_W = *drag_->rotation;
-    d.mode = ik::TaskMode::kPose;
-  }
+  const ik::LinkTask d = drag_task();
   for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
     motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
   }
@@ -367,7 +370,9 @@ Session::TickResult Session::tick(double dt) {
   TickResult result;
   if (!std::isfinite(dt) || dt < 0) dt = 0;
   const double length = duration();
-  if (playback_.playing && length > 0) {
+  if (physics_) {
+    physics_tick(dt, result);
+  } else if (playback_.playing && length > 0) {
     double t = playback_.time + dt * playback_.speed;
     const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
     const double end =

@@ -23,6 +23,7 @@
 #include "animator/keyframes.hpp"
 #include "animator/limits.hpp"
 #include "animator/motion_editor.hpp"
+#include "animator/physics_session.hpp"
 #include "animator/pin.hpp"
 #include "core/clip.hpp"
 #include "core/data.hpp"
@@ -121,8 +122,14 @@ class Session {
   // --- settings ------------------------------------------------------------------------------
   void set_solver_settings(const ik::SolverSettings& settings);
   const ik::SolverSettings& solver_settings() const { return doc_.settings; }
+  /// The effects to simulate (one undo entry). When one moves the figure (simulates()), physics
+  /// starts at the current pose and the ticks advance the world instead of the solver; when none
+  /// does any more, posing is kinematic again from the pose physics left.
   void set_scene(const sim::Scene& scene);
   const sim::Scene& scene() const { return doc_.scene; }
+  /// The simulated world while physics runs, else nullptr.
+  PhysicsSession* physics() { return physics_.get(); }
+  const PhysicsSession* physics() const { return physics_.get(); }
   void set_edit_falloff(double seconds);
   double edit_falloff() const { return doc_.edit_falloff; }
 
@@ -205,9 +212,11 @@ class Session {
     bool committed = false;  // an edit was committed: a recording stopped at the clip budget
   };
   /// Advances by dt seconds of wall time: playback, the solver while something moves, the
-  /// recorder. Cheap when nothing moves.
+  /// recorder. Cheap when nothing moves. While physics runs, the world advances instead of the
+  /// solver and of playback (the playback clock waits).
   TickResult tick(double dt);
-  /// True while a tick would change something (playing, dragging, pins still settling).
+  /// True while a tick would change something (playing, dragging, pins still settling, physics
+  /// running).
   bool needs_tick() const;
 
   // --- the document (what edits change; what undo restores; what is saved) -------------------
@@ -226,6 +235,11 @@ class Session {
   void apply_document(const Document& doc);
   void refresh_kinematics();
   void rebuild_problem();
+  ik::LinkTask drag_task() const;
+  /// Starts or stops physics as the document's scene asks; `restart`: a running world begins
+  /// again at the document's pose (it was replaced).
+  void sync_physics(bool restart);
+  void physics_tick(double dt, TickResult& result);
   bool solve_step();
   void show_animation_at(double t);
   void start_motion_edit();
@@ -260,6 +274,9 @@ class Session {
   // recording
   std::optional<core::Clip> recording_;
   double record_clock_ = 0;
+
+  // physics, while the scene simulates (animator/session_physics.cpp)
+  std::unique_ptr<PhysicsSession> physics_;
 
   // solver state
   core::Data data_;

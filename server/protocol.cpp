@@ -186,6 +186,23 @@ std::string error_message(const json& id, const std::string& message, const std:
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
+json physics_json(const animator::PhysicsMeasures& m) {
+  json polygon = json::array();
+  for (const core::Vector3& p : m.support_polygon) polygon.push_back(vec3(p));
+  json contacts = json::array();
+  for (const animator::ContactArrow& c : m.contacts) {
+    contacts.push_back({{"point", vec3(c.point)}, {"force", vec3(c.force)}});
+  }
+  json stage_us = json::object();
+  for (int e = 0; e < sim::kEffectCount; ++e) {
+    stage_us[sim::to_string(sim::kAllEffects[e])] = m.effect_us[e];
+  }
+  return {{"com", vec3(m.com)},         {"cop", m.cop ? vec3(*m.cop) : json(nullptr)},
+          {"support_polygon", polygon}, {"contacts", contacts},
+          {"balanced", m.balanced},     {"stage_us", stage_us},
+          {"total_us", m.total_us}};
+}
+
 std::string encode_pose_frame(const animator::Session& s,
                               std::uint32_t frame_id,
                               std::uint32_t last_seq) {
@@ -214,6 +231,9 @@ std::string encode_pose_frame(const animator::Session& s,
       put_f32(b, at, v);
       at += 4;
     }
+  }
+  if (const animator::PhysicsSession* physics = s.physics()) {
+    b += json{{"physics", physics_json(physics->measures())}}.dump();
   }
   return b;
 }

@@ -59,7 +59,11 @@ std::string error_message(const nlohmann::json& id,
 /// The `code` of an `error` on an edit the server could not save (and so took back).
 constexpr const char* kNotSaved = "not_saved";
 
-/// The binary pose frame of the session's current pose.
+/// The `physics` object of a pose frame while physics runs (docs/protocol.md "Pose frames").
+nlohmann::json physics_json(const animator::PhysicsMeasures& measures);
+
+/// The binary pose frame of the session's current pose; while physics runs, followed by the
+/// JSON object {"physics": ...}.
 std::string encode_pose_frame(const animator::Session& session,
                               std::uint32_t frame_id,
                               std::uint32_t last_seq);

@@ -21,9 +21,14 @@ void World::step_euler() {
   pairs_.clear();
   point_forces_.clear();
   next_anchors_.clear();
-  if (scene_.contacts() || pins) run_kinematics();
+  StageClock clock(counters_.timers);
+  if (scene_.contacts() || pins) {
+    run_kinematics();
+    clock.lap(TimedPart::kKinematics);
+  }
   if (scene_.contacts()) {
-    run_collision_search();
+    run_collision_search();  // times its two searches itself
+    clock.skip();
     if (!points_.empty()) {
       run_contact_forces();
       if (settings_.integrator == Integrator::kImplicit) {
@@ -31,13 +36,22 @@ void World::step_euler() {
       } else {
         for (ContactPair& p : pairs_) p.wrench = p.wrench0;
       }
+      clock.lap(TimedPart::kContactForces);
     }
   }
-  if (pins) run_dynamic_pins();
+  if (pins) {
+    run_dynamic_pins();
+    clock.lap(TimedPart::kDynamicPins);
+  }
   run_forward_dynamics();
-  if (scene_.hard_limits) run_limit_projection();
+  clock.lap(TimedPart::kDynamics);
+  if (scene_.hard_limits) {
+    run_limit_projection();
+    clock.lap(TimedPart::kLimits);
+  }
   run_integration();
   keep_anchors();
+  clock.lap(TimedPart::kIntegration);
 }
 
 void World::step_rk4() {
@@ -70,21 +84,27 @@ void World::step_rk4() {
     pairs_.clear();
     point_forces_.clear();
     next_anchors_.clear();
+    StageClock clock(counters_.timers);
     if (scene_.contacts()) {
       run_kinematics();
-      run_collision_search();
+      clock.lap(TimedPart::kKinematics);
+      run_collision_search();  // times its two searches itself
+      clock.skip();
       if (!points_.empty()) {
         run_contact_forces();
         for (ContactPair& p : pairs_) p.wrench = p.wrench0;
+        clock.lap(TimedPart::kContactForces);
       }
     }
     run_forward_dynamics();
+    clock.lap(TimedPart::kDynamics);
     if (s == 0) first_anchors = next_anchors_;
     for (int b = 0; b < nb; ++b) {
       core::configuration_rate(*bodies_[b].model, bodies_[b].q, bodies_[b].v, rk_kq_[s][b]);
       rk_kv_[s][b] = work_[b].acceleration;
     }
   }
+  StageClock clock(counters_.timers);
   counters_.count(Stage::kIntegration);
   for (int b = 0; b < nb; ++b) {
     Body& body = bodies_[b];
@@ -94,6 +114,7 @@ void World::step_rk4() {
     body.v = rk_v0_[b] +
              (h / 6.0) * (rk_kv_[0][b] + 2.0 * rk_kv_[1][b] + 2.0 * rk_kv_[2][b] + rk_kv_[3][b]);
   }
+  clock.lap(TimedPart::kIntegration);
   if (scene_.hard_limits) {
     // after an RK4 step limits act as a kinematic stop: position clamped, outward speed removed
     counters_.count(Stage::kLimitProjection);
@@ -115,6 +136,7 @@ void World::step_rk4() {
         }
       }
     }
+    clock.lap(TimedPart::kLimits);
   }
   next_anchors_ = std::move(first_anchors);
   keep_anchors();
@@ -129,12 +151,17 @@ void World::run_kinematics() {
 
 void World::run_collision_search() {
   counters_.count(Stage::kCollisionSearch);
+  StageClock clock(counters_.timers);
   for (int b = 0; b < body_count(); ++b) {
     Work& w = work_[b];
     if (scene_.ground_contact) {
       find_environment_contacts(b, w.shapes, w.data, environment_, points_);
+      clock.lap(TimedPart::kGroundSearch);
     }
-    if (scene_.self_collision) find_self_contacts(b, w.shapes, w.data, w.sweep_order, points_);
+    if (scene_.self_collision) {
+      find_self_contacts(b, w.shapes, w.data, w.sweep_order, points_);
+      clock.lap(TimedPart::kSelfSearch);
+    }
   }
   group_into_pairs(points_, pairs_);
 }

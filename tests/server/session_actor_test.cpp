@@ -84,6 +84,11 @@ class Recorder final : public server::SessionSubscriber {
     if (!poses_.empty()) std::memcpy(&seq, poses_.back().data() + server::kPoseSeqOffset, 4);
     return seq;
   }
+  // the newest pose frame and how many have arrived
+  std::pair<std::string, std::size_t> last_pose() const {
+    std::lock_guard lock(mutex_);
+    return {poses_.empty() ? std::string() : poses_.back(), poses_.size()};
+  }
 
  private:
   mutable std::mutex mutex_;
@@ -342,6 +347,61 @@ TEST_F(SessionActorTest, UnsubscribingMidDragEndsTheDragOfThatConnectionOnly) {
             std::vector<std::string>{"drag"});
   EXPECT_GT(actor_->stats().saves, saves);
   EXPECT_FALSE(watcher->texts_of_type("state").empty());
+}
+
+}  // namespace
+
+namespace {
+
+// The JSON after the link records of a pose frame ({"physics": ...}); null when there is none.
+json pose_trailer(const std::string& frame) {
+  std::uint16_t n = 0;
+  std::memcpy(&n, frame.data() + 6, 2);
+  const std::size_t links_end = server::kPoseHeaderBytes + server::kPoseBytesPerLink * n;
+  if (frame.size() <= links_end) return nullptr;
+  return json::parse(frame.substr(links_end));
+}
+
+TEST_F(SessionActorTest, PoseFramesCarryThePhysicsWhileItRunsAndNotOtherwise) {
+  auto trailer_of_next_frame = [&] {
+    const std::size_t seen = recorder_->last_pose().second;
+    EXPECT_TRUE(eventually([&] { return recorder_->last_pose().second > seen + 1; }));
+    return pose_trailer(recorder_->last_pose().first);
+  };
+  EXPECT_TRUE(pose_trailer(recorder_->last_pose().first).is_null());
+  post({{"type", "set_effects"},
+        {"id", 1},
+        {"scene",
+         {{"gravity", true},
+          {"ground_contact", true},
+          {"friction", true},
+          {"dynamic_pins", true}}}});
+  ASSERT_TRUE(recorder_->wait_for_answer(1));
+  json physics;
+  // a few frames in, the feet carry the weight
+  for (int k = 0; k < 20; ++k) physics = trailer_of_next_frame().at("physics");
+  ASSERT_EQ(physics.at("com").size(), 3u);
+  ASSERT_TRUE(physics.at("cop").is_array());
+  EXPECT_GE(physics.at("support_polygon").size(), 3u);
+  ASSERT_FALSE(physics.at("contacts").empty());
+  double weight = 0;
+  for (const json& c : physics.at("contacts")) {
+    EXPECT_EQ(c.at("point").size(), 3u);
+    weight += c.at("force").at(1).get<double>();
+  }
+  EXPECT_GT(weight, 100.0);
+  EXPECT_TRUE(physics.at("balanced").is_boolean());
+  for (const char* effect :
+       {"gravity", "ground_contact", "friction", "hard_limits", "self_collision", "dynamic_pins"}) {
+    EXPECT_TRUE(physics.at("stage_us").at(effect).is_number()) << effect;
+  }
+  EXPECT_GT(physics.at("stage_us").at("dynamic_pins").get<double>(), 0.0);
+
+  post({{"type", "set_effects"}, {"id", 2}, {"scene", json::object()}});
+  ASSERT_TRUE(recorder_->wait_for_answer(2));
+  // the frame that follows the switch has no physics, and the figure rests (no more frames)
+  EXPECT_TRUE(eventually([&] { return pose_trailer(recorder_->last_pose().first).is_null(); }));
+  EXPECT_FALSE(actor_->call([](animator::Session& s) { return s.needs_tick(); }));
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 // from a joint handle sends drag_begin, increasing drag_move seqs and drag_end and leaves the camera
 // alone; right-click and P send pin/unpin (also next to the pin gizmo); Space, I, Ctrl+Z and
 // Ctrl+Shift+Z send play, key_insert, undo and redo; an edit the server could not save is shown as
-// not saved and not drawn; a dropped connection comes back by itself and asks for a new snapshot.
+// not saved and not drawn; the effects panel sends set_effects and the physics of the pose frames is
+// drawn, with a banner when balance is lost; a dropped connection comes back by itself and asks for
+// a new snapshot.
 // Usage: node tests/web/page_protocol_test.mjs
 
 import { test, after, before } from 'node:test';
@@ -135,6 +137,49 @@ test('an edit the server could not save shows as not saved and is not drawn', as
   await waitForMessage((m) => m.type === 'pin', start, 'pin');
   await page.waitForSelector('#not-saved', { state: 'hidden' });
   assert.equal(await page.evaluate(() => window.pindrag.session.pins.length), pinsBefore + 1);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('the effects panel sends the presets; the physics of the pose frames is drawn, with a banner when balance is lost', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  let start = stub.received.length;
+  await page.click('#preset-stand');
+  const stand = await waitForMessage((m) => m.type === 'set_effects', start, 'set_effects');
+  assert.deepEqual(stand.scene, { gravity: true, ground_contact: true, friction: true, dynamic_pins: true, hard_limits: false, self_collision: false });
+  await page.waitForFunction(() => document.querySelector('#effect-dynamic_pins').checked);
+  start = stub.received.length;
+  await page.click('#effect-hard_limits');
+  const one = await waitForMessage((m) => m.type === 'set_effects', start, 'set_effects');
+  assert.equal(one.scene.hard_limits, true);
+  assert.equal(one.scene.gravity, true, 'a switch changed the other effects');
+
+  // a figure off balance: the centre of mass outside the polygon of its one foot
+  const foot = [[0.05, 0, -0.07], [0.14, 0, -0.07], [0.14, 0, 0.19], [0.05, 0, 0.19]];
+  stub.control.physics = {
+    com: [-0.2, 0.9, 0], cop: [0.1, 0, 0.05], support_polygon: foot, balanced: false,
+    contacts: [{ point: [0.1, 0, -0.05], force: [0, 400, 0] }, { point: [0.1, 0, 0.15], force: [20, 300, 0] }],
+    stage_us: { gravity: 11, ground_contact: 90, friction: 0, dynamic_pins: 1400, hard_limits: 3, self_collision: 0 },
+    total_us: 1504,
+  };
+  stub.sendPose();
+  await page.waitForSelector('#balance-banner', { state: 'visible' });
+  assert.match(await page.textContent('#balance-banner'), /Balance lost/);
+  await page.waitForFunction(() => document.querySelector('[data-effect="dynamic_pins"]').textContent === '1400');
+  assert.equal(await page.textContent('#effects-total'), '1504');
+  await settle(page);
+  await page.screenshot({ path: path.join(out, 'balance_lost.png') });
+  stub.control.physics = { ...stub.control.physics, com: [0.1, 0.9, 0.05], balanced: true };
+  stub.sendPose();
+  await page.waitForSelector('#balance-banner', { state: 'hidden' });
+
+  start = stub.received.length;
+  await page.click('#preset-pose');
+  const pose = await waitForMessage((m) => m.type === 'set_effects', start, 'set_effects');
+  assert.ok(Object.values(pose.scene).every((on) => on === false), 'Pose left an effect on');
+  stub.control.physics = null;
+  stub.sendPose();
+  await page.waitForFunction(() => window.pindrag.lastPose?.physics === null);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -70,6 +70,25 @@ test('malformed pose frames are refused with a message naming the problem', () =
   assert.throws(() => decodePose(tooMany), /for 2 links/);
 });
 
+test('a pose frame carries the physics object after its links while physics runs', () => {
+  const links = [{ p: [0, 1, 0], R: [1, 0, 0, 0] }];
+  assert.equal(decodePose(encodePose({ frame: 1, links })).physics, null);
+  const physics = {
+    com: [0, 0.9, 0],
+    cop: [0.01, 0, 0.02],
+    support_polygon: [[0, 0, 0], [0.1, 0, 0], [0, 0, 0.2]],
+    contacts: [{ point: [0, 0, 0], force: [0, 300, 0] }],
+    balanced: true,
+    stage_us: { gravity: 12.5, dynamic_pins: 800 },
+  };
+  const d = decodePose(encodePose({ frame: 2, links, physics }));
+  assert.deepEqual(d.physics, physics);
+  assert.equal(d.links.length, 1);
+  const bad = new Uint8Array(encodePose({ frame: 3, links, physics }));
+  bad[bad.length - 1] = 0x7b; // '{' where the closing brace was
+  assert.throws(() => decodePose(bad), /physics object is not JSON/);
+});
+
 test('frame ids are ordered across the u32 wrap', () => {
   assert.equal(isNewerFrame(5, null), true);
   assert.equal(isNewerFrame(6, 5), true);

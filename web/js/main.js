@@ -15,6 +15,8 @@ import { createToolbar } from './panel_toolbar.js';
 import { createTimelinePanel } from './panel_timeline.js';
 import { createSelectionPanel } from './panel_selection.js';
 import { createSettingsPanel } from './panel_settings.js';
+import { createEffectsPanel } from './panel_effects.js';
+import { createPhysicsView } from './physics_view.js';
 import { createStatusPanel } from './panel_status.js';
 import { createToasts } from './panel_toasts.js';
 import { createHelpOverlay } from './panel_help.js';
@@ -91,6 +93,7 @@ async function main() {
   createLimitsView(state, viewport, skeleton);
   const pins = createPinsView(state, viewport, skeleton, connection);
   const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
+  createPhysicsView(state, viewport, document.getElementById('stage'));
 
   document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions));
   document.getElementById('timeline').appendChild(createTimelinePanel(state, connection, actions));
@@ -98,6 +101,7 @@ async function main() {
   sidebar.append(
     createSelectionPanel(state, actions, skeleton),
     createSettingsPanel(state, connection),
+    createEffectsPanel(state, connection),
     createStatusPanel(state, connection),
     createSessionsPanel(state, api, switchSession),
   );
@@ -128,7 +132,7 @@ async function main() {
       return poseFrames;
     },
     get lastPose() {
-      return state.pose ? { frame: state.pose.frame, ack: state.pose.ack, time: state.pose.time } : null;
+      return state.pose ? { frame: state.pose.frame, ack: state.pose.ack, time: state.pose.time, physics: state.pose.physics } : null;
     },
     get timeCursor() {
       return state.timeCursor;

@@ -122,7 +122,7 @@ export function decodePose(buffer) {
   if (version !== PROTOCOL_VERSION) throw new Error(`pose frame: protocol ${version}, expected ${PROTOCOL_VERSION}`);
   const n = view.getUint16(6, true);
   const expected = POSE_HEADER_BYTES + n * POSE_LINK_BYTES;
-  if (view.byteLength !== expected) {
+  if (view.byteLength < expected) {
     throw new Error(`pose frame: ${view.byteLength} bytes for ${n} links, expected ${expected}`);
   }
   const frame = view.getUint32(8, true);
@@ -136,13 +136,24 @@ export function decodePose(buffer) {
     links[i] = { p: [f(0), f(1), f(2)], R: [f(3), f(4), f(5), f(6)], q: [f(7), f(8), f(9), f(10)] };
     o += POSE_LINK_BYTES;
   }
-  return { frame, ack, time, root, n, links };
+  // while physics runs, a JSON object {"physics": ...} follows the links
+  const physics = view.byteLength > expected ? decodeTrailer(bytes.subarray(expected)).physics ?? null : null;
+  return { frame, ack, time, root, n, links, physics };
+}
+
+function decodeTrailer(bytes) {
+  try {
+    return JSON.parse(new TextDecoder().decode(bytes));
+  } catch (err) {
+    throw new Error(`pose frame: the physics object is not JSON (${err.message})`);
+  }
 }
 
 /** Encodes a pose frame (the server's job; here for the fake server and the codec test). */
-export function encodePose({ frame, ack = 0, time = 0, root, links }) {
+export function encodePose({ frame, ack = 0, time = 0, root, links, physics = null }) {
   const n = links.length;
-  const buf = new ArrayBuffer(POSE_HEADER_BYTES + n * POSE_LINK_BYTES);
+  const trailer = physics ? new TextEncoder().encode(JSON.stringify({ physics })) : new Uint8Array(0);
+  const buf = new ArrayBuffer(POSE_HEADER_BYTES + n * POSE_LINK_BYTES + trailer.byteLength);
   const view = new DataView(buf);
   view.setUint32(0, POSE_MAGIC, true);
   view.setUint16(4, PROTOCOL_VERSION, true);
@@ -158,6 +169,7 @@ export function encodePose({ frame, ack = 0, time = 0, root, links }) {
     for (let k = 0; k < POSE_LINK_FLOATS; k++) view.setFloat32(o + 4 * k, vals[k], true);
     o += POSE_LINK_BYTES;
   }
+  new Uint8Array(buf, o).set(trailer);
   return buf;
 }
 

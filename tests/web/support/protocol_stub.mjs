@@ -111,11 +111,13 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
   });
   const wss = new WebSocketServer({ server, path: '/ws' });
   let frame = 0;
-  const control = { failSaves: false }; // true: edits are answered as a server with a full disk would
+  // failSaves: edits are answered as a server with a full disk would; physics: the physics object
+  // every pose frame carries (null: none, as while posing is kinematic)
+  const control = { failSaves: false, physics: null };
   const EDITS = new Set(['pin', 'unpin', 'key_insert', 'key_delete', 'undo', 'redo']);
   wss.on('connection', (ws) => {
     let ack = 0;
-    const sendPose = () => ws.send(encodePose({ frame: ++frame, ack, time: session.playback.time, links: rest.links }));
+    const sendPose = () => ws.send(encodePose({ frame: ++frame, ack, time: session.playback.time, links: rest.links, physics: control.physics }));
     const sendState = () => ws.send(JSON.stringify({ type: 'state', ...session, links: rest.links }));
     ws.on('message', (data, isBinary) => {
       if (isBinary) return;
@@ -145,6 +147,11 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
           session.pins = session.pins.filter((p) => p.link !== m.link);
           sendState();
           break;
+        case 'set_effects':
+          session.scene = m.scene;
+          sendState();
+          sendPose();
+          break;
         case 'key_insert':
           session.keys.push({ time: m.time ?? 0, interpolation: m.interpolation || 'smooth' });
           sendState();
@@ -160,6 +167,8 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
     url: `http://127.0.0.1:${server.address().port}/`,
     received,
     control,
+    /** Sends a pose frame to every page (with control.physics). */
+    sendPose: () => wss.clients.forEach((c) => c.send(encodePose({ frame: ++frame, time: session.playback.time, links: rest.links, physics: control.physics }))),
     dropConnections: () => wss.clients.forEach((c) => c.terminate()),
     close: () => new Promise((resolve) => {
       wss.clients.forEach((c) => c.terminate());

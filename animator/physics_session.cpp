@@ -1,0 +1,105 @@
+#include "animator/physics_session.hpp"
+
+#include <chrono>
+
+#include "core/configuration.hpp"
+#include "core/kinematics.hpp"
+#include "sim/balance.hpp"
+#include "sim/placement.hpp"
+
+namespace animator {
+
+namespace {
+
+sim::WorldSettings figure_settings(const core::Model& model) {
+  sim::WorldSettings s;
+  s.contact = sim::figure_contact_settings(model.total_mass());
+  return s;
+}
+
+}  // namespace
+
+bool simulates(const sim::Scene& scene) {
+  return scene.gravity || scene.ground_contact || scene.hard_limits || scene.self_collision ||
+         scene.dynamic_pins;
+}
+
+PhysicsSession::PhysicsSession(std::shared_ptr<const core::Model> model,
+                               const sim::Scene& scene,
+                               const Eigen::VectorXd& q)
+    : model_(std::move(model)), world_(figure_settings(*model_)), data_(*model_) {
+  const sim::GroundPlane& ground = world_.environment().ground;
+  reference_ = scene.ground_contact ? sim::standing_configuration(*model_, q, ground) : q;
+  world_.add_body(model_->name, model_, reference_);
+  world_.set_scene(scene);
+  set_tasks({}, std::nullopt);
+}
+
+void PhysicsSession::set_scene(const sim::Scene& scene) { world_.set_scene(scene); }
+
+void PhysicsSession::add_joint_references(ik::Problem& problem) const {
+  const core::Model& m = *model_;
+  for (int j = 2; j < m.njoints; ++j) {
+    ik::JointReferenceTask r;
+    r.joint = j;
+    switch (m.joint_type[j]) {
+      case core::JointType::kSpherical:
+        r.R_ref = core::quaternion_at(reference_, m.idx_q[j]);
+        break;
+      case core::JointType::kRevolute:
+      case core::JointType::kPrismatic:
+        r.q_ref = reference_[m.idx_q[j]];
+        break;
+      default:
+        continue;  // fixed joints do not move; a free joint below the root is not referenced
+    }
+    problem.add(r);
+  }
+}
+
+void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
+                               const std::optional<ik::LinkTask>& drag) {
+  // dynamics-backed pins need a free root; a figure without one is simulated passively
+  if (model_->njoints < 2 || model_->joint_type[1] != core::JointType::kFree) return;
+  problem_.clear();
+  add_joint_references(problem_);
+  for (const Pin& p : pins) {
+    problem_.add(ik::LinkTask{.role = ik::kPin,
+                              .link = p.link,
+                              .p_LinkPoint = p.p_LinkPoint,
+                              .target_W = p.target_W,
+                              .target_R_W = p.target_R_W,
+                              .mode = p.mode});
+  }
+  if (drag) problem_.add(*drag);
+  world_.set_pin_problem(0, problem_);
+}
+
+void PhysicsSession::advance(double dt) {
+  world_.reset_counters();
+  world_.advance(dt);
+  frame_timers_ = world_.counters().timers;
+}
+
+PhysicsMeasures PhysicsSession::measures() const {
+  core::forward_kinematics(*model_, data_, world_.body(0).q);
+  const sim::BalanceMeasures b = sim::measure_balance(world_, 0, *model_, data_);
+  PhysicsMeasures out;
+  out.com = b.com;
+  out.cop = b.cop;
+  out.support_polygon = b.polygon;
+  out.balanced = b.com_supported;
+  for (const sim::ContactPair& p : world_.contact_pairs()) {
+    if (p.body != 0 || p.partner_body != -1) continue;  // self contact, or another body's
+    out.contacts.push_back({p.ref_W, p.wrench.tail<3>()});
+  }
+  for (int e = 0; e < sim::kEffectCount; ++e) {
+    out.effect_us[e] = 1e6 * sim::effect_seconds(frame_timers_, sim::kAllEffects[e]);
+  }
+  for (const auto t : frame_timers_.time) {
+    out.total_us += std::chrono::duration<double, std::micro>(t).count();
+  }
+  return out;
+}
+
+}  // namespace animator

@@ -1,0 +1,138 @@
+// Tests of a session's physics (animator/physics_session.hpp, animator/session_physics.cpp): the
+// "Stand" effects keep human48 standing, a drag of the left hand moves the pelvis away from it,
+// switching the effects off returns to kinematic posing without a jump, and nothing is simulated
+// while the effects are off.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "animator_fixtures.hpp"
+#include "sim/support_polygon.hpp"
+
+namespace {
+
+using animator::Session;
+using animator_test::human;
+using animator_test::position;
+using animator_test::run;
+using core::Vector3;
+
+constexpr double kFrame = 1.0 / 60;
+
+sim::Scene stand() {
+  sim::Scene s;
+  s.gravity = s.ground_contact = s.friction = s.dynamic_pins = true;
+  return s;
+}
+
+double max_abs_difference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).cwiseAbs().maxCoeff();
+}
+
+TEST(PhysicsSession, StandKeepsTheFigureStandingForTwoSeconds) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  ASSERT_NE(s.physics(), nullptr);
+  EXPECT_TRUE(s.needs_tick());
+  const double pelvis0 = position(s, "pelvis").y();
+  for (int k = 0; k < 120; ++k) {
+    s.tick(kFrame);
+    ASSERT_NEAR(position(s, "pelvis").y(), pelvis0, 0.02) << "tick " << k;
+  }
+  const animator::PhysicsMeasures m = s.physics()->measures();
+  EXPECT_TRUE(m.balanced);
+  ASSERT_TRUE(m.cop.has_value());
+  EXPECT_GE(m.support_polygon.size(), 3u);
+  double weight = 0;
+  for (const animator::ContactArrow& c : m.contacts) weight += c.force.y();
+  EXPECT_NEAR(weight, s.model().total_mass() * 9.81, 0.1 * s.model().total_mass() * 9.81);
+  // each effect that runs costs something, one that is off nothing
+  EXPECT_GT(m.effect_us[static_cast<int>(sim::Effect::kDynamicPins)], 0);
+  EXPECT_GT(m.effect_us[static_cast<int>(sim::Effect::kGroundContact)], 0);
+  EXPECT_EQ(m.effect_us[static_cast<int>(sim::Effect::kSelfCollision)], 0);
+  EXPECT_GT(m.total_us, 0);
+}
+
+// The left hand is on the figure's +x side (it faces +z): pulled down, it drags the upper body
+// toward it, and the pelvis moves the other way to keep the centre of mass over the feet.
+TEST(PhysicsSession, DraggingTheLeftHandDownMovesThePelvisAwayFromIt) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 30, kFrame);
+  const int hand = s.model().link_index("l_hand");
+  const Vector3 hand0 = position(s, "l_hand");
+  const Vector3 pelvis0 = position(s, "pelvis");
+  ASSERT_GT(hand0.x(), pelvis0.x()) << "the left hand is not on the +x side";
+  s.drag_begin(hand, hand0);
+  for (int k = 1; k <= 30; ++k) {
+    s.drag_move(hand0 - Vector3(0, 0.12 * k / 30, 0));
+    s.tick(kFrame);
+  }
+  run(s, 30, kFrame);
+  const Vector3 hand1 = position(s, "l_hand");
+  const Vector3 pelvis1 = position(s, "pelvis");
+  const animator::PhysicsMeasures m = s.physics()->measures();
+  s.drag_end();
+  EXPECT_LT(hand1.y(), hand0.y() - 0.05) << "the hand did not follow the drag down";
+  EXPECT_LT(pelvis1.x(), pelvis0.x() - 0.02) << "the pelvis did not move away from the hand";
+  EXPECT_NEAR(pelvis1.y(), pelvis0.y(), 0.03) << "the figure did not stay up";
+  ASSERT_TRUE(m.cop.has_value()) << "the feet left the ground";
+  EXPECT_TRUE(sim::inside_polygon(m.support_polygon, *m.cop, {}, 0.01));
+  EXPECT_TRUE(s.history().can_undo());
+  EXPECT_EQ(s.history().undo_labels().back(), "drag");
+}
+
+TEST(PhysicsSession, EffectsOffReturnToKinematicPosingWithoutAJump) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 10, kFrame);
+  s.pin(s.model().link_index("l_foot"), ik::TaskMode::kPose);  // where physics holds it now
+  run(s, 10, kFrame);
+  const Eigen::VectorXd q = s.q();
+  s.set_scene(sim::Scene{});
+  EXPECT_EQ(s.physics(), nullptr);
+  EXPECT_EQ(max_abs_difference(s.q(), q), 0);
+  EXPECT_FALSE(s.needs_tick());
+  run(s, 10, kFrame);
+  EXPECT_EQ(max_abs_difference(s.q(), q), 0) << "the pose moved after the switch";
+  // a kinematic drag works from there
+  const int hand = s.model().link_index("r_hand");
+  const Vector3 hand0 = position(s, "r_hand");
+  s.drag_begin(hand, hand0);
+  s.drag_move(hand0 + Vector3(0, 0.1, 0));
+  run(s, 30, kFrame);
+  s.drag_end();
+  EXPECT_NEAR(position(s, "r_hand").y(), hand0.y() + 0.1, 0.01);
+  // undo takes the drag back, then the effects come back on at the pose they left
+  ASSERT_TRUE(s.undo());
+  EXPECT_EQ(s.history().undo_labels().back(), "scene effects");
+  EXPECT_LT(max_abs_difference(s.q(), q), 1e-12);
+  ASSERT_TRUE(s.undo());
+  EXPECT_NE(s.physics(), nullptr);
+}
+
+TEST(PhysicsSession, NothingIsSimulatedWithTheEffectsOff) {
+  Session s(human(), "human48");
+  const Eigen::VectorXd q = s.q();
+  sim::Scene friction_only;
+  friction_only.friction = true;
+  s.set_scene(friction_only);
+  EXPECT_EQ(s.physics(), nullptr);
+  EXPECT_FALSE(s.needs_tick());
+  run(s, 30, kFrame);
+  EXPECT_EQ(s.q(), q);
+}
+
+TEST(PhysicsSession, KeysInsertedWhilePhysicsRunsKeyThePoseShown) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 10, kFrame);
+  const Eigen::VectorXd shown = s.q();
+  const int k = s.key_insert(0.0);
+  Eigen::VectorXd keyed(shown.size());
+  s.keys().sample(s.model(), 0.0, keyed);
+  EXPECT_LT(max_abs_difference(keyed, shown), 1e-9);
+  EXPECT_EQ(k, 0);
+}
+
+}  // namespace
