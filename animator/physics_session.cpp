@@ -1,5 +1,6 @@
 #include "animator/physics_session.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/configuration.hpp"
@@ -31,6 +32,12 @@ PhysicsSession::PhysicsSession(std::shared_ptr<const core::Model> model,
   const sim::GroundPlane& ground = world_.environment().ground;
   reference_ = scene.ground_contact ? sim::standing_configuration(*model_, q, ground) : q;
   world_.add_body(model_->name, model_, reference_);
+  if (scene.ground_contact) {
+    core::forward_kinematics(*model_, data_, reference_);
+    for (const int link : sim::supporting_links(*model_, reference_, ground)) {
+      supports_.push_back({link, core::Quaternion(data_.X_W[link].R)});
+    }
+  }
   world_.set_scene(scene);
   set_tasks({}, std::nullopt);
 }
@@ -61,6 +68,9 @@ void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
                                const std::optional<ik::LinkTask>& drag) {
   // dynamics-backed pins need a free root; a figure without one is simulated passively
   if (model_->njoints < 2 || model_->joint_type[1] != core::JointType::kFree) return;
+  // when a drag ends the joints keep the posture it made, as kinematic posing keeps the pose
+  if (dragging_ && !drag) reference_ = world_.body(0).q;
+  dragging_ = drag.has_value();
   problem_.clear();
   add_joint_references(problem_);
   for (const Pin& p : pins) {
@@ -70,6 +80,15 @@ void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
                               .target_W = p.target_W,
                               .target_R_W = p.target_R_W,
                               .mode = p.mode});
+  }
+  // the links it stands on get weak orientation pins (Yamane §9.4), unless the user pinned them:
+  // the balance feedback (sim/balance_control.hpp) tilts them to keep the figure over its feet
+  for (const auto& [link, R] : supports_) {
+    if (std::any_of(pins.begin(), pins.end(), [&](const Pin& p) { return p.link == link; })) {
+      continue;
+    }
+    problem_.add(ik::LinkTask{
+        .role = ik::kPin, .link = link, .target_R_W = R, .mode = ik::TaskMode::kOrientation});
   }
   if (drag) problem_.add(*drag);
   world_.set_pin_problem(0, problem_);

@@ -11,6 +11,7 @@
 #include <array>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "animator/pin.hpp"
@@ -63,7 +64,8 @@ class PhysicsSession {
   /// The figure's configuration in the world.
   const Eigen::VectorXd& q() const { return world_.body(0).q; }
   const sim::World& world() const { return world_; }
-  /// The pose physics started from, which the joint references hold.
+  /// The posture the joint references hold: the pose physics started from, then the one each
+  /// drag leaves.
   const Eigen::VectorXd& reference() const { return reference_; }
   PhysicsMeasures measures() const;
 
@@ -73,6 +75,9 @@ class PhysicsSession {
   std::shared_ptr<const core::Model> model_;
   sim::World world_;
   Eigen::VectorXd reference_;
+  // the links it stood on when physics started, and their orientations then
+  std::vector<std::pair<int, core::Quaternion>> supports_;
+  bool dragging_ = false;
   mutable core::Data data_;        // scratch of measures()
   sim::StageTimers frame_timers_;  // the last advance's
   ik::Problem problem_;

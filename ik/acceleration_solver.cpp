@@ -144,7 +144,29 @@ bool AccelerationSolver::bound_joint_accelerations(const Eigen::VectorXd& v) {
       report_.bounded = true;
     }
   }
+  hold_at_ranges(v);
   return true;
+}
+
+// A joint already beyond its range does not go further out, whatever the drag asks: the part of
+// its velocity after the step that points out of the range (against the range row's desired
+// velocity d, which points back in) is removed. The drag then lags instead of winding the joint
+// around (a drag out of reach would otherwise spin the limbs at the speed bound).
+void AccelerationSolver::hold_at_ranges(const Eigen::VectorXd& v) {
+  const double h = settings_.step;
+  auto qdd = acceleration_.tail(n_);
+  for (int i = 0; i < range_violations_; ++i) {
+    const RangeRow& rr = range_rows_[i];
+    const int c = model_.idx_v[rr.joint] - 6;
+    if (c < 0) continue;
+    const auto d = rr.desired.head(rr.rows);
+    const double dd = d.squaredNorm();
+    if (!(dd > 0)) continue;
+    const double outward = -d.dot(v.segment(6 + c, rr.rows) + h * qdd.segment(c, rr.rows));
+    if (outward <= 0) continue;
+    qdd.segment(c, rr.rows) += (outward / (h * dd)) * d;
+    report_.bounded = true;
+  }
 }
 
 void AccelerationSolver::split_root(const core::Data& data,
@@ -226,10 +248,12 @@ void AccelerationSolver::fill_rows(const Problem& problem,
   // level 2: joints beyond their ranges are pulled back, joints that would leave them within
   // the range rows' time constant are stopped at the boundary (ik/limits.hpp, velocity laws)
   range_rows_.clear();
+  range_violations_ = 0;
   std::fill(range_flags_.begin(), range_flags_.end(), 0);
   if (!problem.enforce_ranges) return;
   const double w = settings_.range_frequency;
   collect_range_violations(m, q, 0.5 * w, 0.5 * w, range_rows_, range_flags_);
+  range_violations_ = static_cast<int>(range_rows_.size());
   collect_range_predictions(m, q, v, 0.5 / w, 1e-3, range_rows_, range_flags_);
   int rows = 0;
   for (const RangeRow& rr : range_rows_) rows += rr.rows;

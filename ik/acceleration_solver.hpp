@@ -48,8 +48,8 @@ struct AccelerationSettings {
   double pin_frequency = 10.0;         // ω of the pins
   double reference_frequency = 3.0;    // ω of the joint references
   double range_frequency = 20.0;       // ω of the rows that pull a joint back into its range
-  double top_singular_value = 1e-2;    // level 1: singular values below this are damped
-  double top_damping = 1e-3;           // level 1: the damping those directions get
+  double top_singular_value = 0.1;     // level 1: singular values below this are damped
+  double top_damping = 1e-2;           // level 1: the damping those directions get
   double range_damping = 1e-3;         // level 2: SR k
   double damping = 1e-2;               // level 3: SR k of the pins and references
   double max_position_error = 0.1;     // m, the error clamp of the feedback laws
@@ -117,6 +117,7 @@ class AccelerationSolver {
                      const Eigen::VectorXd& v);
   void solve_levels();
   bool bound_joint_accelerations(const Eigen::VectorXd& v);
+  void hold_at_ranges(const Eigen::VectorXd& v);
   void finish(const core::Data& data, const Eigen::VectorXd& bias, const Eigen::VectorXd& Q);
 
   const core::Model& model_;
@@ -139,6 +140,7 @@ class AccelerationSolver {
   core::FrameJacobian point_;
   std::vector<RangeRow> range_rows_;
   std::vector<char> range_flags_;
+  int range_violations_ = 0;  // range_rows_ begins with the joints already beyond their ranges
   // levels
   using SmallMatrix =
       Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDragRows, kMaxDragRows>;

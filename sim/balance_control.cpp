@@ -1,7 +1,7 @@
 #include "sim/balance_control.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -17,6 +17,9 @@ namespace {
 using core::Vector3;
 
 constexpr double kMinNormalForce = 1.0;  // N: a link pressing less is not a support
+// the share of the ground's push the supports (with the links below them, a toe) must carry for
+// the figure to be standing on them
+constexpr double kStandingShare = 0.9;
 
 Vector3 on_plane(const Vector3& p, const GroundPlane& g, const Vector3& n) {
   return p - n * n.dot(p - g.point);
@@ -53,15 +56,64 @@ const ContactPair* ground_pair(const World& world, int body, int link) {
 
 }  // namespace
 
-void BalanceFeedback::remember_footprint(int link, const Vector3& centre) {
+namespace {
+
+// K = Σ (k_P / n_C) u uᵀ, u = r × n over a pair's points: how the ground's moment on the link
+// about the pair's reference falls as the link tilts (from eq. 6.14); regularized so that an
+// axis with no stiffness (about the normal) asks no tilt
+Eigen::LDLT<core::Matrix3> tilt_stiffness(const World& world,
+                                          const ContactPair& pair,
+                                          const Vector3& n) {
+  const double k_point = world.settings().contact.kp / pair.point_count;
+  core::Matrix3 K = core::Matrix3::Zero();
+  for (int k = 0; k < pair.point_count; ++k) {
+    const Vector3 u = (world.contact_points()[pair.first_point + k].p_W - pair.ref_W).cross(n);
+    K.noalias() += k_point * u * u.transpose();
+  }
+  K += (1e-6 * K.trace() + 1e-9) * core::Matrix3::Identity();
+  return K.ldlt();
+}
+
+}  // namespace
+
+// the ground's normal push on the supports and the links below them (a toe under its foot)
+double BalanceFeedback::supported_load(const World& world,
+                                       int body,
+                                       const core::Model& model,
+                                       const Vector3& n) const {
+  double load = 0;
+  for (const ContactPair& p : world.contact_pairs()) {
+    if (p.body != body || p.partner_body != -1) continue;
+    for (int link = p.link; link > 0; link = model.parent[link]) {
+      const bool support = std::any_of(supports_.begin(), supports_.end(), [&](const Support& s) {
+        return world.contact_pairs()[s.pair].link == link;
+      });
+      if (support) {
+        load += n.dot(p.wrench.tail<3>());
+        break;
+      }
+    }
+  }
+  return load;
+}
+
+const Vector3& BalanceFeedback::remember_footprint(int link, const Vector3& centre) {
   for (Footprint& f : footprints_) {
     if (f.link == link) {
       f.centre = centre;
       f.seen = true;
-      return;
+      return f.centre;
     }
   }
   footprints_.push_back({link, centre, true});
+  return footprints_.back().centre;
+}
+
+Vector3 BalanceFeedback::footprint_of(int link, const Vector3& fallback) const {
+  for (const Footprint& f : footprints_) {
+    if (f.link == link) return f.centre;
+  }
+  return fallback;
 }
 
 // the mean of the footprints of this step's supporting pins; forgets the links no longer pinned
@@ -94,7 +146,8 @@ void BalanceFeedback::distribute_load(const Vector3& cop, double total, const Gr
     supported += F[i];
   }
   const Eigen::Vector3d moment_now = A * F;
-  const Eigen::Vector3d wanted = moment_now + total * Eigen::Vector3d(0, u.dot(delta), w.dot(delta));
+  const Eigen::Vector3d wanted =
+      moment_now + total * Eigen::Vector3d(0, u.dot(delta), w.dot(delta));
   const Eigen::Matrix3d AAt = A * A.transpose() + 1e-9 * Eigen::Matrix3d::Identity();
   Eigen::VectorXd F_d = F + A.transpose() * AAt.ldlt().solve(wanted - moment_now);
   F_d = F_d.cwiseMax(0.0);
@@ -111,9 +164,10 @@ void BalanceFeedback::distribute_load(const Vector3& cop, double total, const Gr
 }
 
 std::string validate(const BalanceSettings& s) {
-  for (const auto& [name, value] :
-       {std::pair{"frequency", s.frequency}, {"margin", s.margin}, {"max_tilt", s.max_tilt},
-        {"support_frequency", s.support_frequency}}) {
+  for (const auto& [name, value] : {std::pair{"frequency", s.frequency},
+                                    {"margin", s.margin},
+                                    {"max_tilt", s.max_tilt},
+                                    {"support_frequency", s.support_frequency}}) {
     if (!std::isfinite(value) || value < 0) {
       return std::string("balance.") + name + ": must be a finite number >= 0";
     }
@@ -165,12 +219,14 @@ const BalanceState& BalanceFeedback::update(const World& world,
     Support sp;
     sp.entry = static_cast<int>(&e - solved.entries().data());
     sp.pair = static_cast<int>(pair - world.contact_pairs().data());
-    sp.footprint = polygon_centroid(own, ground);
+    // a link flat on the ground updates its footprint; one on an edge keeps the last
+    sp.flat = own.size() >= 3;
+    sp.footprint = sp.flat ? remember_footprint(pin->link, polygon_centroid(own, ground))
+                           : footprint_of(pin->link, polygon_centroid(own, ground));
     sp.polygon = own;
     sp.force = n.dot(pair->wrench.tail<3>());
     sp.cop = pair->ref_W + n.cross(pair->wrench.head<3>()) / sp.force;
     supports_.push_back(std::move(sp));
-    remember_footprint(pin->link, supports_.back().footprint);
   }
   const Vector3 centre = reference(polygon_centroid(polygon_, ground));
   const Vector3 wanted = xi + (settings.frequency / omega0) * (xi - centre);
@@ -179,28 +235,35 @@ const BalanceState& BalanceFeedback::update(const World& world,
   state_.desired_cop = clamp_into(polygon_, on_plane(wanted, ground, n),
                                   polygon_centroid(polygon_, ground), ground, settings.margin);
 
-  distribute_load(*cop, n.dot(reaction.force), ground);
+  // a figure that rests on other links too (a knee, a hand, its back) is not standing on its
+  // supports: there is no balance to keep
+  const double total = n.dot(reaction.force);
+  if (supports_.empty() || supported_load(world, body, model, n) < kStandingShare * total) {
+    supports_.clear();
+    return state_;
+  }
+  distribute_load(*cop, total, ground);
   for (const Support& sp : supports_) {
     ik::LinkTask& pin = std::get<ik::LinkTask>(solved.entries()[sp.entry].task);
     const ContactPair& pair = world.contact_pairs()[sp.pair];
     // the moment about the pair's reference that puts force F_d at the wanted CoP c_d
-    const Vector3 dM = (sp.wanted_cop - pair.ref_W).cross(sp.wanted_force * n) -
-                       pair.wrench.head<3>();
-    // K = Σ (k_P / n_C) u uᵀ, u = r × n: the moment's stiffness against a tilt
-    const double k_point = world.settings().contact.kp / pair.point_count;
-    core::Matrix3 K = core::Matrix3::Zero();
-    for (int k = 0; k < pair.point_count; ++k) {
-      const Vector3 u = (world.contact_points()[pair.first_point + k].p_W - pair.ref_W).cross(n);
-      K.noalias() += k_point * u * u.transpose();
-    }
-    K += (1e-9 * K.trace() + 1e-12) * n * n.transpose();  // no stiffness about the normal
-    Vector3 tilt = -K.lu().solve(dM);
-    tilt -= n * n.dot(tilt);
-    const double angle = tilt.norm();
-    if (angle > settings.max_tilt) tilt *= settings.max_tilt / angle;
+    const Vector3 dM =
+        (sp.wanted_cop - pair.ref_W).cross(sp.wanted_force * n) - pair.wrench.head<3>();
+    // the tilt from the pin's own orientation R₀ that gives that moment: the present one plus
+    // −K⁻¹ ΔM; a link on an edge or a corner is turned back flat (R₀) first
     const core::Transform& X = data.X_W[pin.link];
+    const core::Matrix3 R0 = pin.target_R_W.toRotationMatrix();
+    Vector3 tilt = Vector3::Zero();
+    if (sp.flat) {
+      const Eigen::AngleAxisd now(X.R * R0.transpose());
+      tilt = now.angle() * now.axis() - tilt_stiffness(world, pair, n).solve(dM);
+      tilt -= n * n.dot(tilt);
+      const double angle = tilt.norm();
+      if (angle > settings.max_tilt) tilt *= settings.max_tilt / angle;
+    }
+    const double angle = tilt.norm();
     pin.target_R_W = core::Quaternion(
-        angle > 0 ? core::Matrix3(Eigen::AngleAxisd(tilt.norm(), tilt.normalized()) * X.R) : X.R);
+        angle > 0 ? core::Matrix3(Eigen::AngleAxisd(angle, tilt / angle) * R0) : R0);
     // the normal force is k_P times the mean penetration: press in by ΔF / k_P
     const double press = (sp.wanted_force - sp.force) / world.settings().contact.kp;
     pin.target_W = X.R * pin.p_LinkPoint + X.p - std::clamp(press, -1e-3, 1e-3) * n;

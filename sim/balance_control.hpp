@@ -16,8 +16,9 @@
 // p_d − p (clamped to its own contact points), which changes the ground's moment on it about its
 // reference point by ΔM = (c_d − c) × F n. A small tilt δ of a link in soft contact changes that
 // moment by −K δ with K = Σ_k (k_P / n_C) u_k u_kᵀ, u_k = r_k × n over its points (r_k from the
-// reference point; from eq. 6.14), so the link's target is its present orientation turned by
-// δ = −K⁻¹ ΔM, and the pin's feedback law tilts it there.
+// reference point; from eq. 6.14), so the link's target is its present tilt from the pin's own
+// orientation plus δ = −K⁻¹ ΔM, and the pin's feedback law tilts it there. A link standing on an
+// edge or a corner is sent back to the pin's orientation (flat) instead.
 #pragma once
 
 #include <vector>
@@ -36,7 +37,7 @@ struct BalanceSettings {
   bool enabled = true;
   double frequency = 2.0;  // k (1/s): the capture point's error decays as exp(−k t)
   double margin = 0.02;    // m: the desired CoP stays this far inside the support polygon
-  double max_tilt = 0.02;  // rad: the largest tilt one step asks of a supporting link
+  double max_tilt = 0.02;  // rad: the largest tilt of a supporting link from its pin's orientation
   // ω (rad/s) of the pins on supporting links while the feedback tilts them: the CoP must follow
   // faster than the capture point diverges (ω₀ ≈ 3 rad/s for a standing adult)
   double support_frequency = 40.0;
@@ -78,13 +79,19 @@ class BalanceFeedback {
   struct Support {
     int entry = 0, pair = 0;  // the pin in the solved problem, its ground pair
     core::Vector3 footprint = core::Vector3::Zero();
-    std::vector<core::Vector3> polygon;  // its own contact points' hull
-    double force = 0;                    // N, normal, now
+    std::vector<core::Vector3> polygon;         // its own contact points' hull
+    bool flat = false;                          // the hull has an area (not an edge, not a corner)
+    double force = 0;                           // N, normal, now
     core::Vector3 cop = core::Vector3::Zero();  // its own, now
     double wanted_force = 0;
     core::Vector3 wanted_cop = core::Vector3::Zero();
   };
-  void remember_footprint(int link, const core::Vector3& centre);
+  const core::Vector3& remember_footprint(int link, const core::Vector3& centre);
+  core::Vector3 footprint_of(int link, const core::Vector3& fallback) const;
+  double supported_load(const World& world,
+                        int body,
+                        const core::Model& model,
+                        const core::Vector3& n) const;
   void distribute_load(const core::Vector3& cop, double total, const GroundPlane& ground);
   core::Vector3 reference(const core::Vector3& fallback);
 

@@ -127,4 +127,21 @@ Eigen::VectorXd place_on_ground(const core::Model& model,
   return out;
 }
 
+std::vector<int> supporting_links(const core::Model& model,
+                                  const Eigen::VectorXd& q,
+                                  const GroundPlane& ground,
+                                  double reach) {
+  const BodyShapes shapes = build_body_shapes(model, q);
+  core::Data data(model);
+  core::forward_kinematics(model, data, q);
+  std::vector<char> supporting(model.njoints, 0);
+  std::vector<int> out;
+  for (int i = 1; i < model.njoints; ++i) {
+    const LinkShape* box = nullptr;
+    supporting[i] = link_height(shapes.shapes[i], data.X_W[i], ground, &box) <= reach;
+    if (supporting[i] && !supporting[model.parent[i]]) out.push_back(i);
+  }
+  return out;
+}
+
 }  // namespace sim

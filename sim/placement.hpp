@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/model.hpp"
 #include "sim/environment.hpp"
@@ -32,5 +33,12 @@ Eigen::VectorXd standing_configuration(const core::Model& model,
                                        const Eigen::VectorXd& q,
                                        const GroundPlane& ground,
                                        double reach = 0.05);
+
+/// The links a figure in configuration q stands on: those whose lowest collision point is within
+/// `reach` of the plane, without the ones whose parent is among them (a toe goes with its foot).
+std::vector<int> supporting_links(const core::Model& model,
+                                  const Eigen::VectorXd& q,
+                                  const GroundPlane& ground,
+                                  double reach = 0.005);
 
 }  // namespace sim

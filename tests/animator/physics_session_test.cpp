@@ -82,6 +82,33 @@ TEST(PhysicsSession, DraggingTheLeftHandDownMovesThePelvisAwayFromIt) {
   EXPECT_EQ(s.history().undo_labels().back(), "drag");
 }
 
+// Stand pins the feet it stands on by their orientation and the balance feedback keeps the
+// figure over them: a slow drag of the hand, held and let go, leaves it standing and balanced in
+// the posture the drag made.
+TEST(PhysicsSession, AfterADragTheFigureStaysBalancedInItsNewPosture) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 30, kFrame);
+  ASSERT_EQ(s.physics()->world().balance_state(0).supports, 2) << "both feet are supports";
+  const int hand = s.model().link_index("l_hand");
+  const Vector3 hand0 = position(s, "l_hand");
+  const double pelvis_height = position(s, "pelvis").y();
+  s.drag_begin(hand, hand0);
+  for (int k = 1; k <= 120; ++k) {
+    s.drag_move(hand0 - Vector3(0, 0.08 * k / 120, 0));
+    s.tick(kFrame);
+  }
+  s.drag_end();
+  const double hand_height = position(s, "l_hand").y();
+  for (int k = 0; k < 240; ++k) {
+    s.tick(kFrame);
+    ASSERT_NEAR(position(s, "pelvis").y(), pelvis_height, 0.05) << "tick " << k;
+  }
+  EXPECT_TRUE(s.physics()->measures().balanced);
+  EXPECT_NEAR(position(s, "l_hand").y(), hand_height, 0.03) << "the posture is kept";
+  EXPECT_LT(s.physics()->world().kinetic_energy(0), 0.5) << "at rest";
+}
+
 TEST(PhysicsSession, EffectsOffReturnToKinematicPosingWithoutAJump) {
   Session s(human(), "human48");
   s.set_scene(stand());
