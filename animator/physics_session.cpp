@@ -74,12 +74,7 @@ void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
   problem_.clear();
   add_joint_references(problem_);
   for (const Pin& p : pins) {
-    problem_.add(ik::LinkTask{.role = ik::kPin,
-                              .link = p.link,
-                              .p_LinkPoint = p.p_LinkPoint,
-                              .target_W = p.target_W,
-                              .target_R_W = p.target_R_W,
-                              .mode = p.mode});
+    problem_.add(p.task());
   }
   // the links it stands on get weak orientation pins (Yamane §9.4), unless the user pinned them:
   // the balance feedback (sim/balance_control.hpp) tilts them to keep the figure over its feet

@@ -17,6 +17,16 @@ struct Pin {
     return link == o.link && mode == o.mode && p_LinkPoint == o.p_LinkPoint &&
            target_W == o.target_W && target_R_W.coeffs() == o.target_R_W.coeffs();
   }
+
+  /// The solver's task for this pin (the solver's default gain and weight).
+  ik::LinkTask task() const {
+    return ik::LinkTask{.role = ik::kPin,
+                        .link = link,
+                        .p_LinkPoint = p_LinkPoint,
+                        .target_W = target_W,
+                        .target_R_W = target_R_W,
+                        .mode = mode};
+  }
 };
 
 }  // namespace animator

@@ -303,12 +303,7 @@ bool Session::needs_tick() const {
 void Session::rebuild_problem() {
   problem_.clear();
   for (const Pin& p : doc_.pins) {
-    problem_.add(ik::LinkTask{.role = ik::kPin,
-                              .link = p.link,
-                              .p_LinkPoint = p.p_LinkPoint,
-                              .target_W = p.target_W,
-                              .target_R_W = p.target_R_W,
-                              .mode = p.mode});
+    problem_.add(p.task());
   }
   if (drag_) {
     ik::LinkTask d = drag_task();

@@ -16,6 +16,7 @@
 #include "sim/placement.hpp"
 #include "sim/props.hpp"
 #include "sim/world.hpp"
+#include "tests/sim/sim_fixtures.hpp"
 
 namespace {
 
@@ -131,16 +132,7 @@ struct StandingFigure {
   }
   // every joint pulled toward its standing value
   void add_joint_references(ik::Problem& problem) const {
-    for (int j = 2; j < model->njoints; ++j) {
-      ik::JointReferenceTask r;
-      r.joint = j;
-      if (model->joint_type[j] == core::JointType::kSpherical) {
-        r.R_ref = core::quaternion_at(q0, model->idx_q[j]);
-      } else {
-        r.q_ref = q0[model->idx_q[j]];
-      }
-      problem.add(r);
-    }
+    sim_fixtures::add_joint_references(*model, q0, problem);
   }
   // checks of every step: no hidden force on the root, contacts push and never pull
   void step_and_check(int steps, double max_com_shift) {

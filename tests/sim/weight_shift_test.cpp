@@ -19,6 +19,7 @@
 #include "sim/placement.hpp"
 #include "sim/support_polygon.hpp"
 #include "sim/world.hpp"
+#include "tests/sim/sim_fixtures.hpp"
 
 namespace {
 
@@ -75,16 +76,7 @@ struct Drag94 {
     }
   }
   void add_joint_references(ik::Problem& p) const {
-    for (int j = 2; j < model->njoints; ++j) {
-      ik::JointReferenceTask r;
-      r.joint = j;
-      if (model->joint_type[j] == core::JointType::kSpherical) {
-        r.R_ref = core::quaternion_at(q0, model->idx_q[j]);
-      } else {
-        r.q_ref = q0[model->idx_q[j]];
-      }
-      p.add(r);
-    }
+    sim_fixtures::add_joint_references(*model, q0, p);
   }
 };
 
