@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <utility>
 
 #include "animator/session_file.hpp"
 #include "server/apply_message.hpp"
@@ -167,7 +168,11 @@ void SessionActor::run() {
       if (session_->needs_tick()) tick();
     }
     if (pose_dirty_) broadcast_pose();
-    if (was_moving_ && !session_->needs_tick()) settle();  // keep where the figure came to rest
+    if (was_moving_ && !session_->needs_tick()) {
+      // the readouts show the state the figure came to rest in, not the last one sent in motion
+      if (held_report_) broadcast_text(*std::exchange(held_report_, std::nullopt));
+      settle();  // keep where the figure came to rest
+    }
     was_moving_ = session_->needs_tick();
     if (journal_) journal_->snapshot_if_due(/*settled=*/false);
   }
@@ -342,9 +347,13 @@ void SessionActor::tick() {
   }
   if (result.pose_changed) pose_dirty_ = true;
   if (result.committed) after_edit();
-  if (result.report && now - last_report_ >= std::chrono::milliseconds(100)) {
+  if (!result.report) return;
+  if (now - last_report_ >= std::chrono::milliseconds(100)) {
     last_report_ = now;
+    held_report_.reset();
     broadcast_text(report_json(*result.report).dump());
+  } else {
+    held_report_ = report_json(*result.report).dump();  // sent when the figure comes to rest
   }
 }
 

@@ -253,6 +253,7 @@ class SessionActor {
   std::uint32_t frame_id_ = 0;
   std::chrono::steady_clock::time_point last_tick_{};
   std::chrono::steady_clock::time_point last_report_{};
+  std::optional<std::string> held_report_;  // the newest report the rate limit held back
   bool was_moving_ = false;
   bool pose_dirty_ = false;
 

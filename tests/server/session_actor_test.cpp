@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstring>
@@ -210,6 +211,35 @@ TEST_F(SessionActorTest, DragSamplesAreCoalescedAndFlushedBeforeALaterCommand) {
   EXPECT_EQ(error.at("message").get<std::string>().rfind(
                 "drag_move.seq: must increase per connection", 0),
             0u);
+}
+
+// Reports go out at most every 100 ms while the figure moves; the one the rate limit held back
+// when it came to rest still goes out, so the readouts never keep a drag that has ended.
+TEST_F(SessionActorTest, TheLastReportDescribesTheFigureAtRest) {
+  const server::Position p = hand();
+  post({{"type", "pin"}, {"link", "l_foot"}, {"id", 1}});
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 2}});
+  for (std::uint32_t seq = 1; seq <= 30; ++seq) {
+    post({{"type", "drag_move"}, {"seq", seq}, {"target", {p[0] + 0.1 * seq, p[1], p[2]}}});
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  post({{"type", "drag_end"}, {"id", 3}});
+  ASSERT_TRUE(recorder_->wait_for_answer(3));
+  ASSERT_TRUE(eventually(
+      [&] { return !actor_->call([](animator::Session& s) { return s.needs_tick(); }); }));
+  actor_->call([](animator::Session&) {});  // whatever the last tick sent has gone out
+  const std::vector<json> reports = recorder_->texts_of_type("report");
+  ASSERT_FALSE(reports.empty());
+  EXPECT_GT(std::max_element(reports.begin(), reports.end(),
+                             [](const json& a, const json& b) {
+                               return a.at("drag_error").get<double>() <
+                                      b.at("drag_error").get<double>();
+                             })
+                ->at("drag_error")
+                .get<double>(),
+            0.05)
+      << "the drag was out of reach";
+  EXPECT_EQ(reports.back().at("drag_error").get<double>(), 0.0) << "the readouts keep the drag";
 }
 
 TEST_F(SessionActorTest, SamplesOfAnotherConnectionAreNotSuperseded) {

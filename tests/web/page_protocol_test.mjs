@@ -75,6 +75,12 @@ test('dragging the right hand sends absolute targets with increasing seq and lea
   const depth = (p) => p.reduce((s, x, k) => s + (x - cam[k]) * dir[k], 0) / Math.hypot(...dir);
   assert.ok(Math.abs(depth(lastTarget) - depth(first)) < 0.02, 'the drag target left the constant-depth plane');
   assert.deepEqual(await page.evaluate(() => window.pindrag.camera()), cameraBefore, 'the camera moved during a joint drag');
+  // a report of the drag arriving after it ended (or one of the figure at rest) shows no drag
+  const report = { type: 'report', microseconds: 40, drag_error: 2.16, pin_position_error: 0, pin_orientation_error: 0, limit_violation: 0, top_rank: 3 };
+  stub.sendMessage(report);
+  await page.waitForFunction(() => document.querySelector('[data-key=microseconds]').textContent === '40');
+  assert.equal(await page.textContent('[data-key=drag_error]'), '–', 'a stale drag error is shown after the drag');
+  assert.equal(await page.textContent('[data-key=top_rank]'), '–');
   await page.screenshot({ path: path.join(out, 'after_drag.png') });
   assert.deepEqual(problems, []);
   await context.close();

@@ -36,6 +36,17 @@ export function createStatusPanel(state, connection) {
     rows.saving.classList.toggle('bad', !saved);
     rows.saving.title = saved ? '' : message || '';
   });
+  // the drag readouts describe a drag in progress: nothing is shown while none is
+  let dragging = false;
+  const clearDragReadouts = () => {
+    rows.drag_error.textContent = '–';
+    rows.drag_error.classList.remove('warn');
+    rows.top_rank.textContent = '–';
+  };
+  state.signals.dragChanged.add((d) => {
+    dragging = d.active;
+    if (!dragging) clearDragReadouts();
+  });
   state.signals.reportReceived.add((r) => {
     rows.microseconds.textContent = fmt(r.microseconds, 0);
     rows.drag_error.textContent = fmt(r.drag_error * 1000, 2);
@@ -45,6 +56,7 @@ export function createStatusPanel(state, connection) {
     rows.top_rank.textContent = r.top_rank ?? '–';
     rows.drag_error.classList.toggle('warn', r.drag_error > 0.01);
     rows.pin_position_error.classList.toggle('warn', r.pin_position_error > 0.005);
+    if (!dragging) clearDragReadouts();
   });
   setInterval(() => {
     rows.poses.textContent = fmt(connection.stats.posesPerSecond, 0);

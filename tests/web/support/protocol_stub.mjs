@@ -169,6 +169,8 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
     control,
     /** Sends a pose frame to every page (with control.physics). */
     sendPose: () => wss.clients.forEach((c) => c.send(encodePose({ frame: ++frame, time: session.playback.time, links: rest.links, physics: control.physics }))),
+    /** Sends a JSON message to every page. */
+    sendMessage: (m) => wss.clients.forEach((c) => c.send(JSON.stringify(m))),
     dropConnections: () => wss.clients.forEach((c) => c.terminate()),
     close: () => new Promise((resolve) => {
       wss.clients.forEach((c) => c.terminate());
