@@ -190,6 +190,21 @@ test('the effects panel sends the presets; the physics of the pose frames is dra
   await context.close();
 });
 
+test('orbiting and panning never take the camera below the floor', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const box = await page.locator('canvas').first().boundingBox();
+  const empty = { x: box.x + 30, y: box.y + 30 }; // a corner: no handle there
+  // orbit hard from above to below, then pan down hard
+  await dragMouse(page, empty, { x: empty.x, y: empty.y + box.height - 60 }, { steps: 20 });
+  await dragMouse(page, { x: empty.x, y: empty.y + box.height - 60 }, { x: empty.x, y: empty.y }, { steps: 20, button: 'right' });
+  await dragMouse(page, empty, { x: empty.x, y: empty.y + box.height - 60 }, { steps: 20, button: 'right' });
+  const camera = await page.evaluate(() => window.pindrag.camera());
+  assert.ok(camera.position[1] >= 0.05 - 1e-9, `the camera went below the floor: y = ${camera.position[1]}`);
+  assert.ok(camera.target[1] >= -1e-9, `the orbit target went below the floor: y = ${camera.target[1]}`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('a dropped connection reconnects and says hello again', async () => {
   const { page, context } = await openPage(browser, stub.url);
   const start = stub.received.length;

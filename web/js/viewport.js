@@ -32,6 +32,15 @@ export function createViewport(state) {
   controls.screenSpacePanning = true;
   controls.minDistance = 0.3;
   controls.maxDistance = 30;
+  // the camera stays above the floor: it orbits no lower than a few degrees under the horizon of
+  // its target, and neither it nor the target is panned below the ground
+  controls.maxPolarAngle = Math.PI / 2 + 0.15;
+  const MIN_CAMERA_HEIGHT = 0.05; // m
+  const keepAboveFloor = () => {
+    if (controls.target.y < 0) controls.target.y = 0;
+    if (camera.position.y < MIN_CAMERA_HEIGHT) camera.position.y = MIN_CAMERA_HEIGHT;
+  };
+  controls.addEventListener('change', keepAboveFloor);
   controls.update();
 
   // lights: soft sky/ground fill and one key light that casts shadows on the floor
