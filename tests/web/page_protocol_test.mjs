@@ -190,6 +190,27 @@ test('the effects panel sends the presets; the physics of the pose frames is dra
   await context.close();
 });
 
+test('a key lands on the frame the time display shows, unless snapping is off', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const track = await page.locator('#tl-track').boundingBox();
+  const keyAt = async (fraction) => {
+    const start = stub.received.length;
+    await page.mouse.click(track.x + fraction * track.width, track.y + track.height / 2);
+    await page.waitForFunction(() => window.pindrag.timeCursor > 0);
+    await page.click('#tl-key-insert');
+    return (await waitForMessage((m) => m.type === 'key_insert', start, 'key_insert')).time;
+  };
+  const snapped = await keyAt(0.3137);
+  const frame = Number((await page.textContent('#tl-frame')).replace('frame ', ''));
+  assert.ok(Math.abs(snapped * 30 - Math.round(snapped * 30)) < 1e-9, `the key at ${snapped} s is between frames`);
+  assert.equal(Math.round(snapped * 30), frame, 'the key and the time display disagree');
+  await page.click('#view-options label:has-text("snap keys") input');
+  const free = await keyAt(0.4221);
+  assert.ok(Math.abs(free * 30 - Math.round(free * 30)) > 1e-6, `snapping off still snapped ${free} s`);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('orbiting and panning never take the camera below the floor', async () => {
   const { page, context, problems } = await openPage(browser, stub.url);
   const box = await page.locator('canvas').first().boundingBox();

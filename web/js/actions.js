@@ -1,6 +1,7 @@
 // Commands shared by the keyboard, the context clicks and the panels. Each one turns an intent into
 // protocol messages; nothing here changes the pose locally (the server answers with state and poses).
 
+import { frameTimeOf, keyTime } from './frames.js';
 import { msg } from './protocol.js';
 import { pinOf, linkLabel } from './state.js';
 
@@ -9,7 +10,7 @@ export function createActions(state, connection) {
   const send = (m) => connection.send(m);
   const linkName = (i) => state.character?.links[i]?.name;
   const playback = () => state.session?.playback || { time: 0, playing: false, speed: 1, loop: true };
-  const frameTime = () => state.session?.clip?.frame_time || 1 / 30;
+  const frameTime = () => frameTimeOf(state);
 
   const actions = {
     togglePin(link) {
@@ -49,9 +50,10 @@ export function createActions(state, connection) {
     last() {
       actions.seek(playback().duration ?? state.session?.clip?.duration ?? 0);
     },
-    /** Keys the current pose at the playhead (which may lie past the last key: that extends the animation). */
+    /** Keys the current pose at the playhead's frame (which may lie past the last key: that extends the
+     * animation). */
     insertKey(interpolation) {
-      send(msg.keyInsert(state.timeCursor, interpolation || state.keyInterpolation || 'smooth'));
+      send(msg.keyInsert(keyTime(state, state.timeCursor), interpolation || state.keyInterpolation || 'smooth'));
     },
     deleteKey() {
       if (state.selectedKey >= 0) {

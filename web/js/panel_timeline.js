@@ -1,6 +1,7 @@
 // The timeline: transport (first, step, play/pause, last), record, the time readout, a scrub track
 // with the keys as diamonds (click selects, drag moves) and the loop range, loop and speed.
 
+import { frameTimeOf, keyTime } from './frames.js';
 import { h, fmt } from './panel_util.js';
 import { INTERPOLATIONS, msg } from './protocol.js';
 
@@ -73,7 +74,7 @@ export function createTimelinePanel(state, connection, actions) {
   track.addEventListener('pointercancel', stopScrub);
 
   function frameTime() {
-    return state.session?.clip?.frame_time || 1 / 30;
+    return frameTimeOf(state);
   }
 
   function showTime(t) {
@@ -107,7 +108,7 @@ export function createTimelinePanel(state, connection, actions) {
       d.addEventListener('pointerup', (e) => {
         if (!d.hasPointerCapture(e.pointerId)) return;
         d.releasePointerCapture(e.pointerId);
-        if (moved) connection.send(msg.keyMove(index, timeAt(e.clientX)));
+        if (moved) connection.send(msg.keyMove(index, keyTime(state, timeAt(e.clientX))));
         else actions.seek(k.time);
       });
       keysLayer.appendChild(d);

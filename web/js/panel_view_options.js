@@ -1,5 +1,5 @@
 // A small bar over the 3D view: show or hide the joint handles, the selected joint's range and the
-// floor grid, and put the camera back home.
+// floor grid, snap keys to frames or not, and put the camera back home.
 
 import { h } from './panel_util.js';
 
@@ -24,6 +24,7 @@ export function createViewOptions(state, viewport) {
     toggle('handles', 'handles', 'Show joint handles (H)'),
     toggle('limits', 'ranges', 'Show the selected joint’s range (L)'),
     toggle('grid', 'grid', 'Show the floor grid'),
+    toggle('snapKeys', 'snap keys', 'Keys land on frames at the clip’s rate'),
     h('button.small', { type: 'button', title: 'Reset the view (Shift+F)', onclick: () => viewport.home() }, 'Home view'),
   );
 }
