@@ -129,8 +129,9 @@ void step_mujoco(benchmark::State& state, const sim::Scene& scene) {
 }
 
 // The dynamics-backed pins' scene (Yamane §9.4): human48 standing on level feet in stiff soft
-// contact, every joint referenced to its standing value, the left hand dragged; its joints are
-// driven at acceleration level and its root moves by the contact forces.
+// contact, orientation pins on both feet (which the balance feedback tilts), every joint
+// referenced to its standing value, the left hand dragged; its joints are driven at acceleration
+// level and its root moves by the contact forces.
 void step_pinned(benchmark::State& state) {
   const core::Model& m = *figure();
   sim::WorldSettings settings;
@@ -155,6 +156,13 @@ void step_pinned(benchmark::State& state) {
   }
   core::Data data(m);
   core::forward_kinematics(m, data, q0);
+  for (const char* foot : {"l_foot", "r_foot"}) {
+    const int link = m.link_index(foot);
+    problem.add(ik::LinkTask{.role = ik::kPin,
+                             .link = link,
+                             .target_R_W = core::Quaternion(data.X_W[link].R),
+                             .mode = ik::TaskMode::kOrientation});
+  }
   const int hand = m.link_index("l_hand");
   problem.add(ik::LinkTask{.role = ik::kDrag, .link = hand, .target_W = data.X_W[hand].p});
   world.set_pin_problem(0, problem);
