@@ -25,24 +25,6 @@ Vector3 on_plane(const Vector3& p, const GroundPlane& g, const Vector3& n) {
   return p - n * n.dot(p - g.point);
 }
 
-// `point` moved toward `centre` until it lies `margin` inside `polygon` (bisection); `centre`
-// itself when even it is not that far inside.
-Vector3 clamp_into(const std::vector<Vector3>& polygon,
-                   const Vector3& point,
-                   const Vector3& centre,
-                   const GroundPlane& ground,
-                   double margin) {
-  if (inside_polygon(polygon, point, ground, -margin)) return point;
-  if (!inside_polygon(polygon, centre, ground, -margin)) return centre;
-  double inside = 0, outside = 1;
-  for (int i = 0; i < 30; ++i) {
-    const double mid = 0.5 * (inside + outside);
-    (inside_polygon(polygon, centre + mid * (point - centre), ground, -margin) ? inside : outside) =
-        mid;
-  }
-  return centre + inside * (point - centre);
-}
-
 // The ground pair of body b on `link`, or nullptr.
 const ContactPair* ground_pair(const World& world, int body, int link) {
   for (const ContactPair& p : world.contact_pairs()) {
@@ -158,7 +140,7 @@ void BalanceFeedback::distribute_load(const Vector3& cop, double total, const Gr
     Support& sp = supports_[i];
     sp.wanted_force = F_d[i];
     sp.wanted_cop = sp.polygon.size() >= 3
-                        ? clamp_into(sp.polygon, sp.cop + rest, sp.footprint, ground, 0.0)
+                        ? clamp_toward(sp.polygon, sp.cop + rest, sp.footprint, ground, 0.0)
                         : sp.cop;
   }
 }
@@ -232,8 +214,8 @@ const BalanceState& BalanceFeedback::update(const World& world,
   const Vector3 wanted = xi + (settings.frequency / omega0) * (xi - centre);
   state_.capture_point = xi;
   state_.cop = *cop;
-  state_.desired_cop = clamp_into(polygon_, on_plane(wanted, ground, n),
-                                  polygon_centroid(polygon_, ground), ground, settings.margin);
+  state_.desired_cop = clamp_toward(polygon_, on_plane(wanted, ground, n),
+                                    polygon_centroid(polygon_, ground), ground, settings.margin);
 
   // a figure that rests on other links too (a knee, a hand, its back) is not standing on its
   // supports: there is no balance to keep

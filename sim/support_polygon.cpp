@@ -91,6 +91,29 @@ Vector3 polygon_centroid(const std::vector<Vector3>& polygon, const GroundPlane&
   return axes.lift(area > 1e-12 ? Point(moment / area) : mean);
 }
 
+Vector3 clamp_toward(const std::vector<Vector3>& polygon,
+                     const Vector3& point,
+                     const Vector3& centre,
+                     const GroundPlane& ground,
+                     double margin) {
+  const PlaneAxes axes(ground);
+  const Point c = axes.flat(centre), d = axes.flat(point) - c;
+  if (polygon.size() < 3) return axes.lift(c);
+  // each edge a→b keeps the points whose signed distance to its left is at least `margin`; along
+  // c + t d that distance is s(c) + t s'(d), so t may grow to (s(c) − margin) / −s'(d)
+  double t = 1.0;
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Point a = axes.flat(polygon[i]), b = axes.flat(polygon[(i + 1) % polygon.size()]);
+    const double length = (b - a).norm();
+    if (!(length > 0)) continue;
+    const double at_centre = cross(a, b, c) / length - margin;
+    if (at_centre < 0) return axes.lift(c);  // the centre itself is not that far inside
+    const double rate = ((b - a).x() * d.y() - (b - a).y() * d.x()) / length;
+    if (rate < 0) t = std::min(t, at_centre / -rate);
+  }
+  return axes.lift(c + t * d);
+}
+
 bool inside_polygon(const std::vector<Vector3>& polygon,
                     const Vector3& point,
                     const GroundPlane& ground,

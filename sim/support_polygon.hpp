@@ -20,6 +20,15 @@ std::vector<core::Vector3> support_polygon(const std::vector<core::Vector3>& poi
 core::Vector3 polygon_centroid(const std::vector<core::Vector3>& polygon,
                                const GroundPlane& ground);
 
+/// The point of the segment from `centre` to `point` (both projected onto `ground`) nearest
+/// `point` that lies at least `margin` inside the convex `polygon` (as support_polygon returns
+/// it): `point` itself when it does, `centre` when not even it does.
+core::Vector3 clamp_toward(const std::vector<core::Vector3>& polygon,
+                           const core::Vector3& point,
+                           const core::Vector3& centre,
+                           const GroundPlane& ground,
+                           double margin);
+
 /// `point` projected onto `ground` lies inside the convex `polygon` (as support_polygon returns
 /// it) or within `tolerance` (m) of it. False for an empty polygon.
 bool inside_polygon(const std::vector<core::Vector3>& polygon,
