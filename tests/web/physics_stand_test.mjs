@@ -98,11 +98,13 @@ test('Stand, then a drag of the left hand down moves the pelvis away from it', a
   }
   // while held: the centre of pressure stays in the support polygon, frame after frame
   let worst = 0;
+  let unbalanced = 0;
   for (let k = 0; k < 10; k++) {
     await page.waitForTimeout(60);
     const physics = await physicsNow(page);
     assert.ok(physics && physics.cop, 'the figure left the ground');
     worst = Math.max(worst, outsidePolygon(physics.cop, physics.support_polygon));
+    if (!physics.balanced) ++unbalanced;
   }
   const pelvis1 = await serverLink(page, 'pelvis');
   const hand1 = await serverLink(page, 'l_hand');
@@ -119,6 +121,15 @@ test('Stand, then a drag of the left hand down moves the pelvis away from it', a
   assert.ok(shift < -0.01, `the pelvis moved ${(shift * 100).toFixed(1)} cm in x, not away from the left hand (−x)`);
   assert.ok(Math.abs(pelvis1[1] - pelvis0[1]) < 0.05, 'the pelvis dropped: the figure fell');
   assert.ok(worst <= COP_TOLERANCE_M, `the centre of pressure left the support polygon by ${(worst * 1000).toFixed(1)} mm`);
+  assert.equal(unbalanced, 0, `balance was lost in ${unbalanced} of 10 samples while the hand was held down`);
+
+  // let go: the figure stays up, balanced, in the posture the drag left
+  await page.waitForTimeout(2000);
+  const rest = await physicsNow(page);
+  assert.ok(rest && rest.balanced, 'the figure lost its balance after the drag was let go');
+  assert.equal(await page.isVisible('#balance-banner'), false);
+  const pelvis2 = await serverLink(page, 'pelvis');
+  assert.ok(Math.abs(pelvis2[1] - pelvis0[1]) < 0.05, 'the figure fell after the drag was let go');
 
   await page.click('#preset-pose');
   await page.waitForFunction(() => window.pindrag.session?.scene?.gravity === false, null, { timeout: 5000 });
