@@ -50,15 +50,17 @@ json settings_to_json(const ik::SolverSettings& s) {
           {"max_orientation_error", s.max_orientation_error},
           {"limit_margin", s.limit_margin},
           {"max_joint_step", s.max_joint_step},
-          {"joint_weights", s.use_joint_weights}};
+          {"joint_weights", s.use_joint_weights},
+          {"hard_pins", s.hard_pins}};
 }
 
 void read_settings(JsonFields& f, const JsonField& j, ik::SolverSettings& s) {
   f.object(j);
   f.refuse_unknown_keys(
-      j, {"dt", "iterations", "damping", "damping_schedule", "manipulability_threshold",
-          "top_damping", "top_singular_value", "range_damping", "max_position_error",
-          "max_orientation_error", "limit_margin", "max_joint_step", "joint_weights", "gains"});
+      j,
+      {"dt", "iterations", "damping", "damping_schedule", "manipulability_threshold", "top_damping",
+       "top_singular_value", "range_damping", "max_position_error", "max_orientation_error",
+       "limit_margin", "max_joint_step", "joint_weights", "hard_pins", "gains"});
   s.dt = f.number_or(j["dt"], s.dt);
   s.iterations = static_cast<int>(
       f.integer_or(j["iterations"], s.iterations, ik::kMinIterations, ik::kMaxIterations));
@@ -78,6 +80,7 @@ void read_settings(JsonFields& f, const JsonField& j, ik::SolverSettings& s) {
   s.limit_margin = f.number_or(j["limit_margin"], s.limit_margin);
   s.max_joint_step = f.number_or(j["max_joint_step"], s.max_joint_step);
   s.use_joint_weights = f.boolean_or(j["joint_weights"], s.use_joint_weights);
+  s.hard_pins = f.boolean_or(j["hard_pins"], s.hard_pins);
   if (const JsonField g = j["gains"]) {
     f.object(g);
     f.refuse_unknown_keys(g, {"drag", "pin", "reference", "limit", "range"});

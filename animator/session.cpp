@@ -20,6 +20,7 @@ bool finite(const core::Vector3& v) { return v.allFinite(); }
 Session::Session(std::shared_ptr<const core::Model> model, std::string character)
     : model_(std::move(model)), character_(std::move(character)), data_(*model_) {
   doc_.q = core::rest_configuration(*model_);  // limbs slightly off straight: see its comment
+  doc_.settings.hard_pins = true;  // a pin holds while the user drags (docs/ik.md, "Pin strength")
   solver_ = std::make_unique<ik::Solver>(*model_, doc_.settings);
   refresh_kinematics();
 }
@@ -302,9 +303,7 @@ bool Session::needs_tick() const {
 
 void Session::rebuild_problem() {
   problem_.clear();
-  for (const Pin& p : doc_.pins) {
-    problem_.add(p.task());
-  }
+  for (const Pin& p : doc_.pins) problem_.add(p.task(), ik::pin_priority(doc_.settings));
   if (drag_) {
     ik::LinkTask d = drag_task();
     // feed-forward: the target's motion since the last step (Yamane eq. 8.8)

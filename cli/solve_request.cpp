@@ -249,7 +249,7 @@ json run_kinematic(const SolveSpec& r, Eigen::VectorXd& q) {
   core::forward_kinematics(m, data, q);
 
   ik::Problem problem;
-  for (const ik::LinkTask& pin : r.pins) problem.add(pin);
+  for (const ik::LinkTask& pin : r.pins) problem.add(pin, ik::pin_priority(r.settings));
   for (const ik::JointReferenceTask& t : r.references) problem.add(t);
   std::vector<int> drag_ids;
   for (const DragSpec& d : r.drags) drag_ids.push_back(problem.add(d.task));

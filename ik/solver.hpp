@@ -76,7 +76,15 @@ struct SolverSettings {
   double limit_margin = kDefaultLimitMargin;
   double max_joint_step = kDefaultMaxJointStep;
   bool use_joint_weights = true;  // scale joints by the model's ik_weight
+  // where the callers that build problems from pins (the session, `pindrag solve`) put them: on
+  // level 1 beside the drag (hard: a pin holds and a drag it forbids stops short), or on level 3
+  // below it (soft, as in the book: the drag is exact and pins give way). The solver itself takes
+  // each task's level from the Problem.
+  bool hard_pins = false;
 };
+
+/// The level pins go on under these settings.
+inline Priority pin_priority(const SolverSettings& s) { return s.hard_pins ? kTop : kLower; }
 
 /// Empty when the settings are usable, else a message naming the first bad field.
 std::string validate(const SolverSettings& s);

@@ -117,6 +117,10 @@ test('pins, playback, keys and undo/redo go out as protocol messages', async () 
   await page.keyboard.press('Control+Shift+z');
   await waitForMessage((m) => m.type === 'redo', start, 'redo');
   await page.screenshot({ path: path.join(out, 'key.png') });
+  start = stub.received.length; // the pin strength switch
+  await page.click('#set-hard_pins');
+  const strength = await waitForMessage((m) => m.type === 'set_settings', start, 'set_settings');
+  assert.deepEqual(strength.settings, { hard_pins: await page.isChecked('#set-hard_pins') });
   assert.deepEqual(problems, []);
   await context.close();
 });

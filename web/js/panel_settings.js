@@ -57,9 +57,19 @@ export function createSettingsPanel(state, connection) {
       },
     };
   });
-  body.append(...controls.map((c) => c.row));
+  // hard pins sit beside the drag and hold; soft pins sit below it and give way (docs/ik.md)
+  const hardPins = h('input#set-hard_pins', { type: 'checkbox' });
+  hardPins.addEventListener('change', () => connection.send(msg.setSettings({ hard_pins: hardPins.checked })));
+  const hardRow = h(
+    'div.setting',
+    { title: 'hard: pins hold and a drag they forbid stops short; soft: the drag goes exactly where the pointer is and pins give way' },
+    h('label', { for: 'set-hard_pins' }, 'Hard pins'),
+    hardPins,
+  );
+  body.append(...controls.map((c) => c.row), hardRow);
   signals.sessionStateChanged.add((s) => {
     if (s.settings) for (const c of controls) c.show(s.settings);
+    if (s.settings && typeof s.settings.hard_pins === 'boolean') hardPins.checked = s.settings.hard_pins;
   });
   return root;
 }
