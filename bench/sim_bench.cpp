@@ -8,7 +8,8 @@
 // with every effect disabled mj_step still runs its whole smooth dynamics, which is what
 // BM_Step_MuJoCo/none shows.
 // Rows: BM_Step/<effects>, BM_Step_MuJoCo/<effects>; "gcf" = gravity + ground contact + friction;
-// BM_Step/gcf_dynamic_pins is the standing figure driven by its dynamics-backed pins.
+// BM_Step/gcf_dynamic_pins is the standing figure driven by its dynamics-backed pins, and
+// BM_Frame60/gcf_dynamic_pins one displayed 60 Hz frame of it (1/60 s of 1 ms steps).
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -132,7 +133,7 @@ void step_mujoco(benchmark::State& state, const sim::Scene& scene) {
 // contact, orientation pins on both feet (which the balance feedback tilts), every joint
 // referenced to its standing value, the left hand dragged; its joints are driven at acceleration
 // level and its root moves by the contact forces.
-void step_pinned(benchmark::State& state) {
+sim::World pinned_world() {
   const core::Model& m = *figure();
   sim::WorldSettings settings;
   settings.contact = sim::figure_contact_settings(m.total_mass());
@@ -166,11 +167,34 @@ void step_pinned(benchmark::State& state) {
   const int hand = m.link_index("l_hand");
   problem.add(ik::LinkTask{.role = ik::kDrag, .link = hand, .target_W = data.X_W[hand].p});
   world.set_pin_problem(0, problem);
+  return world;
+}
+
+void step_pinned(benchmark::State& state) {
+  sim::World world = pinned_world();
   time_steps(state, world);
+}
+
+// One displayed frame at 60 Hz of the same scene: the world advanced by 1/60 s (16 or 17 steps
+// of 1 ms, the remainder carried), as the page's session does once per tick.
+void frame_pinned(benchmark::State& state) {
+  sim::World world = pinned_world();
+  const sim::World start = world;
+  int k = 0;
+  for (auto _ : state) {
+    if (++k % (kRestartEvery / 16 + 1) == 0) {
+      state.PauseTiming();
+      world = start;
+      state.ResumeTiming();
+    }
+    world.advance(1.0 / 60);
+  }
 }
 
 const bool registered = [] {
   benchmark::RegisterBenchmark("BM_Step/gcf_dynamic_pins", step_pinned);
+  benchmark::RegisterBenchmark("BM_Frame60/gcf_dynamic_pins", frame_pinned)
+      ->Unit(benchmark::kMicrosecond);
   for (const Case& c : cases()) {
     benchmark::RegisterBenchmark((std::string("BM_Step/") + c.name).c_str(), step_ours, c.scene);
     benchmark::RegisterBenchmark((std::string("BM_Step_MuJoCo/") + c.name).c_str(), step_mujoco,
