@@ -44,26 +44,6 @@ PhysicsSession::PhysicsSession(std::shared_ptr<const core::Model> model,
 
 void PhysicsSession::set_scene(const sim::Scene& scene) { world_.set_scene(scene); }
 
-void PhysicsSession::add_joint_references(ik::Problem& problem) const {
-  const core::Model& m = *model_;
-  for (int j = 2; j < m.njoints; ++j) {
-    ik::JointReferenceTask r;
-    r.joint = j;
-    switch (m.joint_type[j]) {
-      case core::JointType::kSpherical:
-        r.R_ref = core::quaternion_at(reference_, m.idx_q[j]);
-        break;
-      case core::JointType::kRevolute:
-      case core::JointType::kPrismatic:
-        r.q_ref = reference_[m.idx_q[j]];
-        break;
-      default:
-        continue;  // fixed joints do not move; a free joint below the root is not referenced
-    }
-    problem.add(r);
-  }
-}
-
 void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
                                const std::optional<ik::LinkTask>& drag) {
   // dynamics-backed pins need a free root; a figure without one is simulated passively
@@ -72,7 +52,7 @@ void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
   if (dragging_ && !drag) reference_ = world_.body(0).q;
   dragging_ = drag.has_value();
   problem_.clear();
-  add_joint_references(problem_);
+  ik::add_joint_references(*model_, reference_, problem_);
   for (const Pin& p : pins) {
     problem_.add(p.task());
   }

@@ -70,8 +70,6 @@ class PhysicsSession {
   PhysicsMeasures measures() const;
 
  private:
-  void add_joint_references(ik::Problem& problem) const;
-
   std::shared_ptr<const core::Model> model_;
   sim::World world_;
   Eigen::VectorXd reference_;

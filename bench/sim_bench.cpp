@@ -145,16 +145,7 @@ sim::World pinned_world() {
   scene.gravity = scene.ground_contact = scene.friction = scene.dynamic_pins = true;
   world.set_scene(scene);
   ik::Problem problem;
-  for (int j = 2; j < m.njoints; ++j) {
-    ik::JointReferenceTask r;
-    r.joint = j;
-    if (m.joint_type[j] == core::JointType::kSpherical) {
-      r.R_ref = core::quaternion_at(q0, m.idx_q[j]);
-    } else {
-      r.q_ref = q0[m.idx_q[j]];
-    }
-    problem.add(r);
-  }
+  ik::add_joint_references(m, q0, problem);
   core::Data data(m);
   core::forward_kinematics(m, data, q0);
   for (const char* foot : {"l_foot", "r_foot"}) {

@@ -59,4 +59,8 @@ class Problem {
   int next_id_ = 1;
 };
 
+/// Adds a reference on every moving joint below the root (revolute, prismatic, spherical) toward
+/// its value in q, with the default gain and weight: the posture q as a preference.
+void add_joint_references(const core::Model& model, const Eigen::VectorXd& q, Problem& problem);
+
 }  // namespace ik

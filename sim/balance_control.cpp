@@ -36,10 +36,6 @@ const ContactPair* ground_pair(const World& world, int body, int link) {
   return nullptr;
 }
 
-}  // namespace
-
-namespace {
-
 // K = Σ (k_P / n_C) u uᵀ, u = r × n over a pair's points: how the ground's moment on the link
 // about the pair's reference falls as the link tilts (from eq. 6.14); regularized so that an
 // axis with no stiffness (about the normal) asks no tilt
@@ -197,7 +193,7 @@ const BalanceState& BalanceFeedback::update(const World& world,
     for (int k = 0; k < pair->point_count; ++k) {
       points_.push_back(world.contact_points()[pair->first_point + k].p_W);
     }
-    const std::vector<Vector3> own = support_polygon(points_, ground);
+    std::vector<Vector3> own = support_polygon(points_, ground);
     Support sp;
     sp.entry = static_cast<int>(&e - solved.entries().data());
     sp.pair = static_cast<int>(pair - world.contact_pairs().data());
@@ -205,17 +201,18 @@ const BalanceState& BalanceFeedback::update(const World& world,
     sp.flat = own.size() >= 3;
     sp.footprint = sp.flat ? remember_footprint(pin->link, polygon_centroid(own, ground))
                            : footprint_of(pin->link, polygon_centroid(own, ground));
-    sp.polygon = own;
+    sp.polygon = std::move(own);
     sp.force = n.dot(pair->wrench.tail<3>());
     sp.cop = pair->ref_W + n.cross(pair->wrench.head<3>()) / sp.force;
     supports_.push_back(std::move(sp));
   }
-  const Vector3 centre = reference(polygon_centroid(polygon_, ground));
+  const Vector3 polygon_centre = polygon_centroid(polygon_, ground);
+  const Vector3 centre = reference(polygon_centre);
   const Vector3 wanted = xi + (settings.frequency / omega0) * (xi - centre);
   state_.capture_point = xi;
   state_.cop = *cop;
-  state_.desired_cop = clamp_toward(polygon_, on_plane(wanted, ground, n),
-                                    polygon_centroid(polygon_, ground), ground, settings.margin);
+  state_.desired_cop =
+      clamp_toward(polygon_, on_plane(wanted, ground, n), polygon_centre, ground, settings.margin);
 
   // a figure that rests on other links too (a knee, a hand, its back) is not standing on its
   // supports: there is no balance to keep

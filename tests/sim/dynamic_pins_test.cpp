@@ -16,7 +16,6 @@
 #include "sim/placement.hpp"
 #include "sim/props.hpp"
 #include "sim/world.hpp"
-#include "tests/sim/sim_fixtures.hpp"
 
 namespace {
 
@@ -132,7 +131,7 @@ struct StandingFigure {
   }
   // every joint pulled toward its standing value
   void add_joint_references(ik::Problem& problem) const {
-    sim_fixtures::add_joint_references(*model, q0, problem);
+    ik::add_joint_references(*model, q0, problem);
   }
   // checks of every step: no hidden force on the root, contacts push and never pull
   void step_and_check(int steps, double max_com_shift) {

@@ -1,12 +1,10 @@
-// Shared set-ups of the simulation tests: the book's box on a floor or a slope; a figure's joints
-// referenced to a pose.
+// Shared set-ups of the simulation tests: the book's box on a floor or a slope.
 #pragma once
 
 #include <cmath>
 #include <memory>
 
 #include "core/configuration.hpp"
-#include "ik/problem.hpp"
 #include "sim/props.hpp"
 #include "sim/world.hpp"
 
@@ -54,21 +52,5 @@ struct BoxOnGround {
     return down_slope.dot(core::quaternion_at(q, 3) * core::Vector3(world.body(0).v.tail<3>()));
   }
 };
-
-/// Adds to `problem` a reference on every joint below the root toward its value in q0.
-inline void add_joint_references(const core::Model& model,
-                                 const Eigen::VectorXd& q0,
-                                 ik::Problem& problem) {
-  for (int j = 2; j < model.njoints; ++j) {
-    ik::JointReferenceTask r;
-    r.joint = j;
-    if (model.joint_type[j] == core::JointType::kSpherical) {
-      r.R_ref = core::quaternion_at(q0, model.idx_q[j]);
-    } else {
-      r.q_ref = q0[model.idx_q[j]];
-    }
-    problem.add(r);
-  }
-}
 
 }  // namespace sim_fixtures

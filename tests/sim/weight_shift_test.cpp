@@ -19,7 +19,6 @@
 #include "sim/placement.hpp"
 #include "sim/support_polygon.hpp"
 #include "sim/world.hpp"
-#include "tests/sim/sim_fixtures.hpp"
 
 namespace {
 
@@ -75,9 +74,7 @@ struct Drag94 {
       p.add(pin);
     }
   }
-  void add_joint_references(ik::Problem& p) const {
-    sim_fixtures::add_joint_references(*model, q0, p);
-  }
+  void add_joint_references(ik::Problem& p) const { ik::add_joint_references(*model, q0, p); }
 };
 
 std::string polygon_text(const std::vector<Vector3>& polygon) {
