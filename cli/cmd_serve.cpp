@@ -131,6 +131,11 @@ void add_serve_command(CLI::App& app) {
                   "delete saved sessions nobody opened or changed for this many days (0: never)")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
+  cmd->add_option("--actor-threads", options->actor_threads,
+                  "threads that run the sessions' edits and solver ticks, shared by all sessions "
+                  "(0: one per core, at least 2)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
   add_limit_options(*cmd, *options);
   cmd->callback([options] {
     const int code = serve(*options);

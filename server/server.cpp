@@ -80,6 +80,7 @@ struct Server::Impl {
         registry(RegistryOptions{.data_dir = o.data_dir,
                                  .max_live = o.max_live_sessions,
                                  .expire_days = o.expire_days,
+                                 .actor_threads = o.actor_threads,
                                  .limits = o.limits}),
         policy(o.host, 0, 0),
         http(GateLimits{.header_timeout = o.header_timeout}),

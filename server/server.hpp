@@ -25,7 +25,8 @@ struct ServerOptions {
   std::string data_dir;  // empty: sessions are kept in memory only
   std::string web_root;  // empty: default_web_root()
   std::size_t max_live_sessions = RegistryOptions::kDefaultMaxLive;  // in memory at once
-  int expire_days = 0;  // > 0: sessions untouched for that many days are deleted
+  int expire_days = 0;         // > 0: sessions untouched for that many days are deleted
+  unsigned actor_threads = 0;  // threads running the sessions (0: one per core, at least 2)
   /// How long an HTTP request waits for its session's actor before answering 503.
   std::chrono::milliseconds call_timeout{10000};
   /// How long a connection may take to send a request header (HTTP) or upgrade (WebSocket).

@@ -23,31 +23,46 @@ std::string not_saved(const animator::SessionWriteError& e) {
 
 SessionActor::SessionActor(std::string id,
                            std::unique_ptr<animator::Session> session,
-                           std::unique_ptr<SessionJournal> journal)
+                           std::unique_ptr<SessionJournal> journal,
+                           std::shared_ptr<ActorPool> pool)
     : id_(std::move(id)),
       session_(std::move(session)),
       model_(session_->model_ptr()),
       journal_(std::move(journal)),
-      thread_([this] { run(); }) {}
+      pool_(std::move(pool)) {
+  start();
+}
 
 SessionActor::SessionActor(std::string id,
                            std::unique_ptr<animator::Session> session,
-                           const std::string& save_path)
+                           const std::string& save_path,
+                           std::shared_ptr<ActorPool> pool)
     : id_(std::move(id)),
       session_(std::move(session)),
       model_(session_->model_ptr()),
       journal_(save_path.empty() ? nullptr : SessionJournal::start(save_path, *session_)),
-      thread_([this] { run(); }) {}
+      pool_(std::move(pool)) {
+  start();
+}
 
 SessionActor::~SessionActor() { stop(); }
+
+void SessionActor::start() {
+  last_tick_ = Clock::now();
+  if (!session_->needs_tick()) return;  // the first step runs when something is posted
+  std::lock_guard lock(mutex_);
+  pool_->wake_at(this, last_tick_ + kTickPeriod);
+}
 
 void SessionActor::stop() {
   {
     std::lock_guard lock(mutex_);
-    stopping_ = true;
+    if (stopping_) return;
+    stopping_ = true;  // nothing more is accepted, and no step asks for another
   }
-  wake_.notify_one();
-  if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+  pool_->remove(this);        // waits for a step in progress
+  step();                     // whatever was posted before stop() runs now
+  if (was_moving_) settle();  // keep the final state
 }
 
 ActorStats SessionActor::stats() const {
@@ -75,22 +90,22 @@ void SessionActor::unsubscribe(std::uint64_t connection) {
 
 void SessionActor::post(std::uint64_t connection, ClientRequest request) {
   if (const auto* move = std::get_if<DragMove>(&request.message)) {
-    {
-      std::lock_guard lock(mutex_);
-      ++stats_.drag_samples_received;
-      if (mailbox_ && mailbox_->connection != connection) {
-        // another connection's sample is not superseded by this one: keep it in order
-        Item flushed;
-        flushed.kind = Item::Kind::kDrag;
-        flushed.drag = std::move(*mailbox_);
-        queue_.push_back(std::move(flushed));
-        mailbox_.reset();
-      }
-      if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
-      mailbox_->move = *move;
-      if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
+    std::lock_guard lock(mutex_);
+    ++stats_.drag_samples_received;
+    if (stopping_) return;
+    if (mailbox_ && mailbox_->connection != connection) {
+      // another connection's sample is not superseded by this one: keep it in order
+      Item flushed;
+      flushed.kind = Item::Kind::kDrag;
+      flushed.drag = std::move(*mailbox_);
+      queue_.push_back(std::move(flushed));
+      mailbox_.reset();
     }
-    wake_.notify_one();
+    if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
+    mailbox_->move = *move;
+    if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
+    // while a tick waits for kMinTickInterval, samples gather in the mailbox until it is due
+    if (!tick_deferred_) pool_->wake(this);
     return;
   }
   Item item;
@@ -122,62 +137,54 @@ bool SessionActor::enqueue(Item item) {
       mailbox_.reset();
     }
     queue_.push_back(std::move(item));
+    pool_->wake(this);  // under the lock: a stopped actor is never woken again
   }
-  wake_.notify_one();
   return true;
 }
 
-void SessionActor::run() {
-  last_tick_ = Clock::now();
-  for (;;) {
-    std::deque<Item> batch;
-    std::optional<DragSample> sample;
-    {
-      std::unique_lock lock(mutex_);
-      auto ready = [&] { return stopping_ || !queue_.empty() || mailbox_.has_value(); };
-      if (session_->needs_tick()) {
-        wake_.wait_until(lock, last_tick_ + kTickPeriod, ready);
-      } else {
-        wake_.wait(lock, ready);
-      }
-      batch.swap(queue_);
-      sample.swap(mailbox_);
-      if (stopping_ && batch.empty() && !sample) break;
-    }
-    bool new_drag_sample = false;
-    for (Item& item : batch) {
-      if (item.kind == Item::Kind::kDrag) {
-        new_drag_sample = apply_drag(item.drag) || new_drag_sample;
-      } else {
-        process(item);
-      }
-    }
-    if (sample) new_drag_sample = apply_drag(*sample) || new_drag_sample;
-
-    const auto now = Clock::now();
-    const bool moving = session_->needs_tick();
-    if (moving && ((new_drag_sample && now - last_tick_ >= kMinTickInterval) ||
-                   now - last_tick_ >= kTickPeriod)) {
-      tick();
-    } else if (moving && new_drag_sample) {
-      // too soon after the last tick: come back when the interval has passed
-      std::unique_lock lock(mutex_);
-      wake_.wait_until(lock, last_tick_ + kMinTickInterval,
-                       [&] { return stopping_ || !queue_.empty(); });
-      lock.unlock();
-      if (session_->needs_tick()) tick();
-    }
-    if (pose_dirty_) broadcast_pose();
-    if (was_moving_ && !session_->needs_tick()) {
-      // the readouts show the state the figure came to rest in, not the last one sent in motion
-      if (held_report_) broadcast_text(*std::exchange(held_report_, std::nullopt));
-      settle();  // keep where the figure came to rest
-    }
-    was_moving_ = session_->needs_tick();
-    if (journal_) journal_->snapshot_if_due(/*settled=*/false);
+void SessionActor::step() {
+  std::deque<Item> batch;
+  std::optional<DragSample> sample;
+  {
+    std::lock_guard lock(mutex_);
+    batch.swap(queue_);
+    sample.swap(mailbox_);
+    tick_deferred_ = false;
   }
-  // whatever was posted before stop() has run; keep the final state
-  if (was_moving_) settle();
+  bool new_drag_sample = false;
+  for (Item& item : batch) {
+    if (item.kind == Item::Kind::kDrag) {
+      new_drag_sample = apply_drag(item.drag) || new_drag_sample;
+    } else {
+      process(item);
+    }
+  }
+  if (sample) new_drag_sample = apply_drag(*sample) || new_drag_sample;
+
+  // a new drag sample is solved at once unless the last tick was under kMinTickInterval ago
+  const auto now = Clock::now();
+  const bool moving = session_->needs_tick();
+  tick_owed_ = moving && (tick_owed_ || new_drag_sample);
+  if (moving &&
+      ((tick_owed_ && now - last_tick_ >= kMinTickInterval) || now - last_tick_ >= kTickPeriod)) {
+    tick();
+    tick_owed_ = false;
+  }
+  if (pose_dirty_) broadcast_pose();
+  if (was_moving_ && !session_->needs_tick()) {
+    // the readouts show the state the figure came to rest in, not the last one sent in motion
+    if (held_report_) broadcast_text(*std::exchange(held_report_, std::nullopt));
+    settle();  // keep where the figure came to rest
+  }
+  was_moving_ = session_->needs_tick();
+  if (journal_) journal_->snapshot_if_due(/*settled=*/false);
+
+  std::optional<Clock::time_point> next_tick;
+  if (was_moving_) next_tick = last_tick_ + (tick_owed_ ? kMinTickInterval : kTickPeriod);
+  std::lock_guard lock(mutex_);
+  if (stopping_) return;
+  tick_deferred_ = was_moving_ && tick_owed_;
+  pool_->wake_at(this, next_tick);
 }
 
 bool SessionActor::apply_drag(DragSample& sample) {

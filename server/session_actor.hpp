@@ -1,4 +1,6 @@
-// One actor per session: the only thread that touches its animator::Session (STYLE.md §8).
+// One actor per session: the only code that touches its animator::Session (STYLE.md §8). Its
+// steps run on a shared ActorPool (server/actor_pool.hpp), one step at a time, so the number of
+// threads does not grow with the number of sessions.
 //
 // Thread contract: every public function may be called from any thread; they only enqueue.
 // Commands (edits, subscriptions, calls from HTTP handlers) run in the order they were posted;
@@ -14,12 +16,11 @@
 // gets an `error` on the edit's id instead of an `ack`, and every connection gets the `state`
 // again. A drag_move is acknowledged as applied to the gesture in progress; the gesture is
 // saved with its drag_end. The settled pose after an edit is recorded when the figure comes to
-// rest; snapshots are written off the actor thread.
+// rest; snapshots are written off the actor's steps.
 #pragma once
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -30,10 +31,10 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "animator/session.hpp"
+#include "server/actor_pool.hpp"
 #include "server/messages.hpp"
 #include "server/protocol.hpp"
 #include "server/session_journal.hpp"
@@ -46,7 +47,7 @@ class ActorBusy : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A WebSocket connection as the actor sees it. Called on the actor thread; must not block.
+/// A WebSocket connection as the actor sees it. Called from the actor's steps; must not block.
 class SessionSubscriber {
  public:
   virtual ~SessionSubscriber() = default;
@@ -67,23 +68,25 @@ struct ActorStats {
   std::uint64_t pose_frames = 0;
 };
 
-class SessionActor {
+class SessionActor : private ActorPool::Job {
  public:
   /// Smallest wall time between two solver ticks (at most 500 ticks per second).
   static constexpr std::chrono::microseconds kMinTickInterval{2000};
   /// Wall time between ticks while playing or settling with no new drag sample.
   static constexpr std::chrono::microseconds kTickPeriod{16667};
 
-  /// `journal` null: the session is not saved.
+  /// `journal` null: the session is not saved. Steps run on `pool`.
   SessionActor(std::string id,
                std::unique_ptr<animator::Session> session,
-               std::unique_ptr<SessionJournal> journal);
+               std::unique_ptr<SessionJournal> journal,
+               std::shared_ptr<ActorPool> pool = ActorPool::shared());
   /// A new session saved at `save_path` (SessionJournal::start); empty: not saved.
   /// @throws animator::SessionWriteError
   SessionActor(std::string id,
                std::unique_ptr<animator::Session> session,
-               const std::string& save_path);
-  ~SessionActor();
+               const std::string& save_path,
+               std::shared_ptr<ActorPool> pool = ActorPool::shared());
+  ~SessionActor() override;
   SessionActor(const SessionActor&) = delete;
   SessionActor& operator=(const SessionActor&) = delete;
 
@@ -99,7 +102,7 @@ class SessionActor {
   /// and answered with `ack` or `error` when it has an id.
   void post(std::uint64_t connection, ClientRequest request);
 
-  /// Runs `f` on the actor thread and returns its result (exceptions are rethrown here).
+  /// Runs `f` in a step of the actor and returns its result (exceptions are rethrown here).
   /// `edit`: the call may change the document; then the change is saved before the result is
   /// returned, and `state` is sent. @throws animator::SessionWriteError when it cannot be saved
   /// (the change is taken back then)
@@ -197,7 +200,8 @@ class SessionActor {
   }
 
   ActorStats stats() const;
-  /// Stops the thread after the commands already posted (saving if needed). Idempotent.
+  /// Runs the commands already posted (saving if needed) on the calling thread, then stops: no
+  /// step runs afterwards. Idempotent. Must not be called from a step of this actor.
   void stop();
 
  private:
@@ -220,7 +224,8 @@ class SessionActor {
   bool enqueue_call(std::function<void(animator::Session&, const std::function<void()>& save)> f,
                     bool edit);
   bool enqueue(Item item);
-  void run();
+  void start();
+  void step() override;  // applies what was posted, ticks when due, asks for the next tick
   void process(Item& item);
   void apply_request(std::uint64_t connection, const ClientRequest& request);
   bool apply_drag(DragSample& sample);
@@ -238,15 +243,16 @@ class SessionActor {
   std::unique_ptr<SessionJournal> journal_;  // null: not saved
 
   // shared with posting threads
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
+  const std::shared_ptr<ActorPool> pool_;
+  mutable std::mutex mutex_;             // taken before the pool's, never after
   std::atomic<int> waiting_callers_{0};  // in call_within()
   std::deque<Item> queue_;
   std::optional<DragSample> mailbox_;
   bool stopping_ = false;
+  bool tick_deferred_ = false;  // a sample's tick waits for kMinTickInterval: samples gather
   ActorStats stats_;
 
-  // actor thread only
+  // the actor's steps only
   std::map<std::uint64_t, std::shared_ptr<SessionSubscriber>> subscribers_;
   std::map<std::uint64_t, std::uint32_t> last_seq_;
   std::optional<std::uint64_t> drag_owner_;  // the connection whose drag_begin is active
@@ -256,8 +262,7 @@ class SessionActor {
   std::optional<std::string> held_report_;  // the newest report the rate limit held back
   bool was_moving_ = false;
   bool pose_dirty_ = false;
-
-  std::thread thread_;
+  bool tick_owed_ = false;  // a drag sample arrived since the last tick
 };
 
 }  // namespace server

@@ -23,7 +23,9 @@ std::int64_t unix_now() {
 }  // namespace
 
 SessionRegistry::SessionRegistry(RegistryOptions options)
-    : options_(std::move(options)), store_(options_.data_dir) {
+    : options_(std::move(options)),
+      pool_(std::make_shared<ActorPool>(options_.actor_threads)),
+      store_(options_.data_dir) {
   options_.max_live = std::max<std::size_t>(1, options_.max_live);
   reaper_ = std::thread([this] { reap(); });
 }
@@ -67,7 +69,8 @@ std::shared_ptr<SessionActor> SessionRegistry::load(const std::string& id) {
     throw std::runtime_error("session " + id + ": its saved file does not load: " + e.what());
   }
   store_.touch(id);
-  return std::make_shared<SessionActor>(id, std::move(loaded.session), std::move(loaded.journal));
+  return std::make_shared<SessionActor>(id, std::move(loaded.session), std::move(loaded.journal),
+                                        pool_);
 }
 
 // Called with the lock held before a session becomes live: when max_live sessions are live (or
@@ -122,7 +125,7 @@ SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session
       throw animator::SessionWriteError(e.code().value(), e.what());
     }
     // the snapshot and an empty journal are written before the session is announced
-    handle.actor = std::make_shared<SessionActor>(handle.id, std::move(session), path);
+    handle.actor = std::make_shared<SessionActor>(handle.id, std::move(session), path, pool_);
   } catch (...) {
     try {
       store_.remove(handle.id);

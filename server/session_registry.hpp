@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "animator/session.hpp"
+#include "server/actor_pool.hpp"
 #include "server/session_actor.hpp"
 #include "server/session_store.hpp"
 
@@ -46,6 +47,7 @@ struct RegistryOptions {
   std::string data_dir;                    // empty: sessions live in memory only
   std::size_t max_live = kDefaultMaxLive;  // sessions in memory at once (at least 1)
   int expire_days = 0;                     // > 0: delete sessions untouched for that many days
+  unsigned actor_threads = 0;              // workers running the sessions' actors; 0: one per core
   animator::Limits limits{};               // every session created or loaded is held to these
 };
 
@@ -99,6 +101,8 @@ class SessionRegistry {
   std::size_t size() const;
   /// Sessions in memory now.
   std::size_t live() const;
+  /// The threads that run the live sessions' actors.
+  std::size_t actor_threads() const { return pool_->threads(); }
   /// Stops every actor (each saves its last state) and the registry's thread.
   void stop_all();
   const std::string& data_dir() const { return options_.data_dir; }
@@ -125,6 +129,7 @@ class SessionRegistry {
   void reap();
 
   RegistryOptions options_;
+  std::shared_ptr<ActorPool> pool_;  // outlives every actor it runs
   SessionStore store_;
   mutable std::mutex mutex_;
   std::condition_variable changed_;  // an entry left kLoading or kStopping, or evictions queued

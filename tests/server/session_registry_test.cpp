@@ -11,6 +11,7 @@
 #include <functional>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include "io/bundled_characters.hpp"
 
@@ -135,6 +136,32 @@ TEST_F(SessionRegistryTest, WithoutADataFolderNothingLeavesMemoryAndAFullRegistr
   EXPECT_EQ(r->find(a.id, a.token).status, 200);
   EXPECT_EQ(r->remove(a.id, a.token), 200);
   EXPECT_NO_THROW(r->create(new_session()));
+}
+
+int process_threads() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("Threads:", 0) == 0) return std::stoi(line.substr(8));
+  }
+  return -1;
+}
+
+TEST_F(SessionRegistryTest, FiftyLiveSessionsRunOnTheSameFewThreads) {
+  auto r = std::make_unique<SessionRegistry>(
+      server::RegistryOptions{.data_dir = "", .max_live = 64, .actor_threads = 2});
+  EXPECT_EQ(r->actor_threads(), 2u);
+  const int before = process_threads();
+  ASSERT_GT(before, 0);
+  std::vector<server::SessionHandle> sessions;
+  for (int i = 0; i < 50; ++i) sessions.push_back(r->create(new_session()));
+  // every session has run work of its own, so each actor has been scheduled
+  for (auto& s : sessions) {
+    EXPECT_EQ(s.actor->call([](animator::Session& session) { return session.model().nq; }),
+              sessions.front().actor->model().nq);
+  }
+  EXPECT_EQ(r->live(), 50u);
+  EXPECT_EQ(process_threads(), before);  // no thread per session
 }
 
 }  // namespace

@@ -1,0 +1,156 @@
+// Tests for server/actor_pool.hpp: a fixed set of workers runs every job, a job never runs on two
+// workers at once, a wake during a step runs it once more, deadlines run it on time and can be
+// moved, and a removed job never runs again.
+#include "server/actor_pool.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using server::ActorPool;
+using namespace std::chrono_literals;
+
+bool eventually(const std::function<bool()>& done) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(1ms);
+  }
+  return true;
+}
+
+// A job that counts its steps, records which threads ran it and whether two steps overlapped.
+class CountingJob : public ActorPool::Job {
+ public:
+  explicit CountingJob(std::chrono::microseconds work = 0us) : work_(work) {}
+  void step() override {
+    if (inside_.exchange(true)) overlapped = true;
+    {
+      std::lock_guard lock(mutex_);
+      threads_.insert(std::this_thread::get_id());
+    }
+    if (work_.count() > 0) std::this_thread::sleep_for(work_);
+    if (on_step) on_step();
+    ++steps;
+    inside_ = false;
+  }
+  std::set<std::thread::id> threads() const {
+    std::lock_guard lock(mutex_);
+    return threads_;
+  }
+  std::atomic<int> steps{0};
+  std::atomic<bool> overlapped{false};
+  std::function<void()> on_step;
+
+ private:
+  std::chrono::microseconds work_;
+  std::atomic<bool> inside_{false};
+  mutable std::mutex mutex_;
+  std::set<std::thread::id> threads_;
+};
+
+TEST(ActorPool, ManyJobsRunOnTheFixedWorkersAndNoJobOverlapsItself) {
+  ActorPool pool(3);
+  EXPECT_EQ(pool.threads(), 3u);
+  std::vector<std::unique_ptr<CountingJob>> jobs;
+  for (int i = 0; i < 40; ++i) jobs.push_back(std::make_unique<CountingJob>(100us));
+  // every job is woken from several threads at once, many times
+  std::vector<std::thread> wakers;
+  for (int t = 0; t < 4; ++t) {
+    wakers.emplace_back([&] {
+      for (int round = 0; round < 50; ++round)
+        for (auto& job : jobs) pool.wake(job.get());
+    });
+  }
+  for (auto& waker : wakers) waker.join();
+  ASSERT_TRUE(eventually([&] { return pool.jobs() == 0; }));
+  std::set<std::thread::id> workers;
+  for (auto& job : jobs) {
+    EXPECT_GE(job->steps.load(), 1);
+    EXPECT_FALSE(job->overlapped.load());
+    for (const auto id : job->threads()) workers.insert(id);
+  }
+  EXPECT_LE(workers.size(), 3u);
+  for (auto& job : jobs) pool.remove(job.get());
+}
+
+TEST(ActorPool, AWakeDuringAStepRunsTheJobOnceMore) {
+  ActorPool pool(2);
+  CountingJob job(20ms);
+  pool.wake(&job);
+  ASSERT_TRUE(eventually([&] { return job.threads().size() == 1; }));  // the first step runs
+  for (int i = 0; i < 5; ++i) pool.wake(&job);  // all while it runs: one more step, not five
+  ASSERT_TRUE(eventually([&] { return pool.jobs() == 0; }));
+  EXPECT_EQ(job.steps.load(), 2);
+  EXPECT_FALSE(job.overlapped.load());
+}
+
+TEST(ActorPool, ADeadlineRunsTheJobThenAndANewDeadlineReplacesTheOld) {
+  ActorPool pool(2);
+  CountingJob job;
+  const auto start = ActorPool::Clock::now();
+  std::atomic<std::int64_t> ran_after_us{-1};
+  job.on_step = [&] {
+    ran_after_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                       ActorPool::Clock::now() - start)
+                       .count();
+  };
+  pool.wake_at(&job, start + 500ms);
+  pool.wake_at(&job, start + 30ms);  // replaces the 500 ms one
+  ASSERT_TRUE(eventually([&] { return job.steps.load() == 1; }));
+  EXPECT_GE(ran_after_us.load(), 30000);
+  EXPECT_LT(ran_after_us.load(), 400000);
+  std::this_thread::sleep_for(600ms);
+  EXPECT_EQ(job.steps.load(), 1);  // the replaced deadline never fires
+
+  pool.wake_at(&job, ActorPool::Clock::now() + 50ms);
+  pool.wake_at(&job, std::nullopt);  // no deadline any more
+  std::this_thread::sleep_for(150ms);
+  EXPECT_EQ(job.steps.load(), 1);
+  EXPECT_EQ(pool.jobs(), 0u);
+}
+
+TEST(ActorPool, RemoveWaitsForTheStepInProgressAndTheJobNeverRunsAgain) {
+  ActorPool pool(2);
+  CountingJob job(50ms);
+  pool.wake(&job);
+  ASSERT_TRUE(eventually([&] { return job.threads().size() == 1; }));
+  pool.wake(&job);                                        // would run it again after this step
+  pool.wake_at(&job, ActorPool::Clock::now() + 100ms);  // and at a deadline
+  pool.remove(&job);
+  EXPECT_EQ(job.steps.load(), 1);  // the step in progress finished before remove returned
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(job.steps.load(), 1);
+  EXPECT_EQ(pool.jobs(), 0u);
+}
+
+TEST(ActorPool, AStepMayRemoveItsOwnJob) {
+  ActorPool pool(1);
+  CountingJob job;
+  job.on_step = [&] {
+    pool.wake_at(&job, ActorPool::Clock::now() + 10ms);
+    pool.remove(&job);  // does not wait for itself
+  };
+  pool.wake(&job);
+  ASSERT_TRUE(eventually([&] { return job.steps.load() == 1; }));
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(job.steps.load(), 1);
+  EXPECT_EQ(pool.jobs(), 0u);
+}
+
+TEST(ActorPool, ZeroThreadsMeansOnePerCoreAndAtLeastTwo) {
+  ActorPool pool(0);
+  EXPECT_GE(pool.threads(), 2u);
+  EXPECT_GE(pool.threads(), std::thread::hardware_concurrency());
+}
+
+}  // namespace
