@@ -51,7 +51,8 @@ json settings_to_json(const ik::SolverSettings& s) {
           {"limit_margin", s.limit_margin},
           {"max_joint_step", s.max_joint_step},
           {"joint_weights", s.use_joint_weights},
-          {"hard_pins", s.hard_pins}};
+          {"hard_pins", s.hard_pins},
+          {"floor", s.floor}};
 }
 
 void read_settings(JsonFields& f, const JsonField& j, ik::SolverSettings& s) {
@@ -60,7 +61,7 @@ void read_settings(JsonFields& f, const JsonField& j, ik::SolverSettings& s) {
       j,
       {"dt", "iterations", "damping", "damping_schedule", "manipulability_threshold", "top_damping",
        "top_singular_value", "range_damping", "max_position_error", "max_orientation_error",
-       "limit_margin", "max_joint_step", "joint_weights", "hard_pins", "gains"});
+       "limit_margin", "max_joint_step", "joint_weights", "hard_pins", "floor", "gains"});
   s.dt = f.number_or(j["dt"], s.dt);
   s.iterations = static_cast<int>(
       f.integer_or(j["iterations"], s.iterations, ik::kMinIterations, ik::kMaxIterations));
@@ -81,6 +82,7 @@ void read_settings(JsonFields& f, const JsonField& j, ik::SolverSettings& s) {
   s.max_joint_step = f.number_or(j["max_joint_step"], s.max_joint_step);
   s.use_joint_weights = f.boolean_or(j["joint_weights"], s.use_joint_weights);
   s.hard_pins = f.boolean_or(j["hard_pins"], s.hard_pins);
+  s.floor = f.boolean_or(j["floor"], s.floor);
   if (const JsonField g = j["gains"]) {
     f.object(g);
     f.refuse_unknown_keys(g, {"drag", "pin", "reference", "limit", "range"});

@@ -21,6 +21,8 @@ Session::Session(std::shared_ptr<const core::Model> model, std::string character
     : model_(std::move(model)), character_(std::move(character)), data_(*model_) {
   doc_.q = core::rest_configuration(*model_);  // limbs slightly off straight: see its comment
   doc_.settings.hard_pins = true;  // a pin holds while the user drags (docs/ik.md, "Pin strength")
+  doc_.settings.floor = true;      // posing stays on the floor (animator/floor_contacts.hpp)
+  floor_ = std::make_unique<FloorContacts>(*model_);
   solver_ = std::make_unique<ik::Solver>(*model_, doc_.settings);
   refresh_kinematics();
 }
@@ -112,7 +114,12 @@ void Session::drag_begin(int link,
   }
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
-  drag_ = Drag{link, p_LinkPoint, target_W, std::nullopt, target_W};
+  drag_ = Drag{.link = link,
+               .p_LinkPoint = p_LinkPoint,
+               .target_W = target_W,
+               .rotation = std::nullopt,
+               .previous_target_W = target_W};
+  floor_gesture_ = false;  // the floor's contacts are taken afresh for this gesture
   if (in_motion) start_motion_edit();
   settling_ = true;
 }
@@ -304,10 +311,13 @@ bool Session::needs_tick() const {
 void Session::rebuild_problem() {
   problem_.clear();
   for (const Pin& p : doc_.pins) problem_.add(p.task(), ik::pin_priority(doc_.settings));
+  if (floor_gesture_) {
+    for (const Pin& p : floor_->pins()) problem_.add(p.task(), ik::pin_priority(doc_.settings));
+  }
   if (drag_) {
     ik::LinkTask d = drag_task();
     // feed-forward: the target's motion since the last step (Yamane eq. 8.8)
-    d.velocity_W = (drag_->target_W - drag_->previous_target_W) / doc_.settings.dt;
+    d.velocity_W = (d.target_W - drag_->previous_target_W) / doc_.settings.dt;
     problem_.add(d);
   }
 }
@@ -317,6 +327,7 @@ ik::LinkTask Session::drag_task() const {
                  .link = drag_->link,
                  .p_LinkPoint = drag_->p_LinkPoint,
                  .target_W = drag_->target_W};
+  if (doc_.settings.floor) d.target_W.y() = std::max(d.target_W.y(), drag_->floor_y);
   if (drag_->rotation) {
     d.target_R_W = *drag_->rotation;
     d.mode = ik::TaskMode::kPose;
@@ -324,17 +335,56 @@ ik::LinkTask Session::drag_task() const {
   return d;
 }
 
+void Session::touch_floor() {
+  if (!doc_.settings.floor) {
+    floor_gesture_ = false;
+    return;
+  }
+  floor_skips_.assign(model_->njoints, 0);
+  for (const Pin& p : doc_.pins) floor_skips_[p.link] = 1;
+  if (drag_) floor_skips_[drag_->link] = 1;
+  if (!floor_gesture_) {
+    floor_->begin(data_, floor_skips_);
+    floor_gesture_ = true;
+  }
+}
+
+bool Session::went_under_floor() {
+  if (!floor_gesture_) return false;
+  bool under = floor_->catch_penetrations(data_, floor_skips_);
+  if (drag_) {
+    const double depth = floor_->depth(data_, drag_->link);
+    if (depth > 0) {
+      // the dragged link met the floor: its point goes no lower than where it is, lifted back
+      const double point_y = (data_.X_W[drag_->link] * drag_->p_LinkPoint).y();
+      drag_->floor_y = std::max(drag_->floor_y, point_y + depth);
+      under = true;
+    }
+  }
+  return under;
+}
+
 bool Session::solve_step() {
+  touch_floor();
   rebuild_problem();
   if (!problem_.active()) {
     settling_ = false;
+    floor_gesture_ = false;
     return false;
   }
-  const ik::Report& r = solver_->step(problem_, data_, doc_.q);
-  if (drag_) drag_->previous_target_W = drag_->target_W;
+  const ik::Report* r = &solver_->step(problem_, data_, doc_.q);
+  if (drag_) drag_->previous_target_W = drag_task().target_W;
+  // links the step carried below the floor are held on it, and lifted back within this frame
+  bool went_under = false;
+  for (int k = 0; k < kFloorCorrections && went_under_floor(); ++k) {
+    went_under = true;
+    rebuild_problem();
+    r = &solver_->step(problem_, data_, doc_.q);
+  }
   // keep ticking while anything still moves noticeably (pins recovering after a drag)
   constexpr double kRestSpeed = 1e-3;  // rad/s: under 2e-5 rad per frame, invisible
-  settling_ = drag_.has_value() || r.max_joint_speed > kRestSpeed;
+  settling_ = drag_.has_value() || went_under || r->max_joint_speed > kRestSpeed;
+  if (!settling_) floor_gesture_ = false;  // the gesture has come to rest
   return true;
 }
 

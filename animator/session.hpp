@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -19,6 +20,7 @@
 
 #include "animator/document.hpp"
 #include "animator/edit_layer.hpp"
+#include "animator/floor_contacts.hpp"
 #include "animator/history.hpp"
 #include "animator/keyframes.hpp"
 #include "animator/limits.hpp"
@@ -241,6 +243,12 @@ class Session {
   void sync_physics(bool restart);
   void physics_tick(double dt, TickResult& result);
   bool solve_step();
+  /// Before a step: starts the gesture's floor contacts if it has none (settings.floor).
+  void touch_floor();
+  /// After a step: holds links that went below the floor on it; true when any did.
+  bool went_under_floor();
+  /// Extra solver steps a frame takes to lift links that went below the floor back onto it.
+  static constexpr int kFloorCorrections = 2;
   void show_animation_at(double t);
   void start_motion_edit();
   void finish_motion_edit();
@@ -264,7 +272,10 @@ class Session {
     core::Vector3 p_LinkPoint = core::Vector3::Zero();
     core::Vector3 target_W = core::Vector3::Zero();
     std::optional<core::Quaternion> rotation;
-    core::Vector3 previous_target_W = core::Vector3::Zero();
+    core::Vector3 previous_target_W = core::Vector3::Zero();  // as solved (the floor applied)
+    // with the floor on, the dragged point is kept at or above this height: where it was when
+    // the dragged link's shapes met the floor
+    double floor_y = -std::numeric_limits<double>::infinity();
   };
   std::optional<Drag> drag_;
   std::optional<Document> gesture_before_;
@@ -283,6 +294,10 @@ class Session {
   ik::Problem problem_;
   std::unique_ptr<ik::Solver> solver_;
   bool settling_ = false;
+  // the floor in kinematic posing (settings.floor): contacts held for the gesture being solved
+  std::unique_ptr<FloorContacts> floor_;
+  bool floor_gesture_ = false;     // floor_ holds this gesture's contacts
+  std::vector<char> floor_skips_;  // links the floor leaves alone: dragged or pinned by the user
   int edit_counter_ = 0;
   int gesture_counter_ = 0;  // ids of committed edits
   int last_gesture_ = 0;     // the newest edit, which settling amends

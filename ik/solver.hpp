@@ -81,6 +81,9 @@ struct SolverSettings {
   // below it (soft, as in the book: the drag is exact and pins give way). The solver itself takes
   // each task's level from the Problem.
   bool hard_pins = false;
+  // for the session, not the solver: kinematic posing keeps collision shapes above the floor
+  // y = 0 and links resting on it where they stand (animator/floor_contacts.hpp)
+  bool floor = false;
 };
 
 /// The level pins go on under these settings.

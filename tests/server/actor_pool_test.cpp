@@ -100,9 +100,9 @@ TEST(ActorPool, ADeadlineRunsTheJobThenAndANewDeadlineReplacesTheOld) {
   const auto start = ActorPool::Clock::now();
   std::atomic<std::int64_t> ran_after_us{-1};
   job.on_step = [&] {
-    ran_after_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                       ActorPool::Clock::now() - start)
-                       .count();
+    ran_after_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(ActorPool::Clock::now() - start)
+            .count();
   };
   pool.wake_at(&job, start + 500ms);
   pool.wake_at(&job, start + 30ms);  // replaces the 500 ms one
@@ -124,7 +124,7 @@ TEST(ActorPool, RemoveWaitsForTheStepInProgressAndTheJobNeverRunsAgain) {
   CountingJob job(50ms);
   pool.wake(&job);
   ASSERT_TRUE(eventually([&] { return job.threads().size() == 1; }));
-  pool.wake(&job);                                        // would run it again after this step
+  pool.wake(&job);                                      // would run it again after this step
   pool.wake_at(&job, ActorPool::Clock::now() + 100ms);  // and at a deadline
   pool.remove(&job);
   EXPECT_EQ(job.steps.load(), 1);  // the step in progress finished before remove returned

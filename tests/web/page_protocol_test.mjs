@@ -121,6 +121,10 @@ test('pins, playback, keys and undo/redo go out as protocol messages', async () 
   await page.click('#set-hard_pins');
   const strength = await waitForMessage((m) => m.type === 'set_settings', start, 'set_settings');
   assert.deepEqual(strength.settings, { hard_pins: await page.isChecked('#set-hard_pins') });
+  start = stub.received.length; // the floor switch
+  await page.click('#set-floor');
+  const floorSwitch = await waitForMessage((m) => m.type === 'set_settings', start, 'set_settings');
+  assert.deepEqual(floorSwitch.settings, { floor: await page.isChecked('#set-floor') });
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -66,10 +66,20 @@ export function createSettingsPanel(state, connection) {
     h('label', { for: 'set-hard_pins' }, 'Hard pins'),
     hardPins,
   );
-  body.append(...controls.map((c) => c.row), hardRow);
+  // the floor: posing keeps the figure above y = 0 and its resting links where they stand
+  const floor = h('input#set-floor', { type: 'checkbox' });
+  floor.addEventListener('change', () => connection.send(msg.setSettings({ floor: floor.checked })));
+  const floorRow = h(
+    'div.setting',
+    { title: 'on: no link goes below the floor and links resting on it stay where they stand unless dragged' },
+    h('label', { for: 'set-floor' }, 'Floor'),
+    floor,
+  );
+  body.append(...controls.map((c) => c.row), hardRow, floorRow);
   signals.sessionStateChanged.add((s) => {
     if (s.settings) for (const c of controls) c.show(s.settings);
     if (s.settings && typeof s.settings.hard_pins === 'boolean') hardPins.checked = s.settings.hard_pins;
+    if (s.settings && typeof s.settings.floor === 'boolean') floor.checked = s.settings.floor;
   });
   return root;
 }
