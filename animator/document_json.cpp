@@ -1,6 +1,8 @@
 #include "animator/document_json.hpp"
 
+#include <algorithm>
 #include <limits>
+#include <optional>
 
 #include "core/configuration.hpp"
 
@@ -193,6 +195,49 @@ std::shared_ptr<const core::Clip> read_clip(JsonFields& f,
   for (std::size_t k = 0; k < frames.size(); ++k) c.frames.push_back(f.numbers(frames[k], m.nq));
   if (const std::string e = core::check_clip(m, c); !e.empty()) f.fail(clip, e);
   return std::make_shared<const core::Clip>(std::move(c));
+}
+
+// --- the BVH source of a character -------------------------------------------------------------
+
+json bvh_source_to_json(const io::BvhLayout& layout) {
+  json joints = json::array();
+  for (const io::BvhLayout::Joint& joint : layout.joints) {
+    json channels = json::array();
+    for (const io::BvhChannel c : joint.channels) channels.push_back(io::to_string(c));
+    joints.push_back({{"name", joint.name}, {"channels", channels}});
+  }
+  return {{"scale", layout.scale}, {"joints", joints}};
+}
+
+std::shared_ptr<const io::BvhLayout> read_bvh_source(JsonFields& f, const JsonField& j) {
+  const JsonField source = f.object(j);
+  auto out = std::make_shared<io::BvhLayout>();
+  out->scale = f.number(source["scale"]);
+  if (!(out->scale > 0)) f.fail(source["scale"], "must be positive (metres per file unit)");
+  const JsonField joints = f.array(source["joints"], io::kMaxBvhJoints, "joints");
+  for (std::size_t k = 0; k < joints.size(); ++k) {
+    const JsonField joint = f.object(joints[k]);
+    io::BvhLayout::Joint& out_joint = out->joints.emplace_back();
+    out_joint.name = f.string(joint["name"]);
+    if (out->find(out_joint.name) != &out_joint) f.fail(joint["name"], "names a joint twice");
+    const JsonField channels = f.array(joint["channels"], 6, "channels");
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      const std::string name = f.string(channels[c]);
+      std::optional<io::BvhChannel> channel;
+      for (int v = 0; v < 6; ++v) {
+        if (name == io::to_string(static_cast<io::BvhChannel>(v))) {
+          channel = static_cast<io::BvhChannel>(v);
+        }
+      }
+      if (!channel) f.fail(channels[c], io::in_quotes(name) + " is not a BVH channel");
+      if (std::find(out_joint.channels.begin(), out_joint.channels.end(), *channel) !=
+          out_joint.channels.end()) {
+        f.fail(channels[c], io::in_quotes(name) + " is listed twice");
+      }
+      out_joint.channels.push_back(*channel);
+    }
+  }
+  return out;
 }
 
 // --- scene and playback ------------------------------------------------------------------------

@@ -11,6 +11,7 @@
 
 #include "animator/document.hpp"
 #include "animator/session.hpp"
+#include "io/bvh_import.hpp"
 #include "io/json_parse.hpp"
 #include "io/json_reader.hpp"
 
@@ -54,6 +55,13 @@ std::shared_ptr<const core::Clip> read_clip(io::JsonFields& f,
 /// The scene as {"gravity": bool, ...}: every effect of sim::kAllEffects by name.
 nlohmann::json scene_to_json(const sim::Scene& scene);
 sim::Scene read_scene(io::JsonFields& f, const io::JsonField& scene);
+
+/// The BVH file a character came from (Session::bvh_source) as {"scale": metres per file unit,
+/// "joints": [{"name": "Hips", "channels": ["Xposition", ..., "Yrotation"]}, ...]} in file order.
+nlohmann::json bvh_source_to_json(const io::BvhLayout& layout);
+/// A layout with a positive scale, at most io::kMaxBvhJoints joints with distinct names, and at
+/// most 6 distinct channels each, named as io::to_string(BvhChannel) writes them.
+std::shared_ptr<const io::BvhLayout> read_bvh_source(io::JsonFields& f, const io::JsonField& j);
 
 /// Time, speed and loop; whether it plays is not saved.
 nlohmann::json playback_to_json(const Playback& p);

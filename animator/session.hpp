@@ -33,6 +33,10 @@
 #include "core/skin.hpp"
 #include "ik/solver.hpp"
 
+namespace io {
+struct BvhLayout;  // io/bvh_import.hpp
+}  // namespace io
+
 namespace animator {
 
 /// A request the session cannot carry out (unknown link, bad number; nothing to undo is not an
@@ -229,6 +233,13 @@ class Session {
   /// An optional skinned mesh to draw and export with the character.
   void set_skin(std::shared_ptr<const core::SkinnedMesh> skin) { skin_ = std::move(skin); }
   const core::SkinnedMesh* skin() const { return skin_.get(); }
+  /// The BVH file the character came from: its joint names, channel orders and unit, which BVH
+  /// exports keep by default (io/bvh_writer.hpp). Null for other characters. Not an edit: undo
+  /// leaves it, and it is saved with the character.
+  void set_bvh_source(std::shared_ptr<const io::BvhLayout> source) {
+    bvh_source_ = std::move(source);
+  }
+  const std::shared_ptr<const io::BvhLayout>& bvh_source() const { return bvh_source_; }
 
  private:
   friend class DocumentChange;
@@ -261,6 +272,7 @@ class Session {
   std::shared_ptr<const core::Model> model_;
   std::string character_;
   std::shared_ptr<const core::SkinnedMesh> skin_;
+  std::shared_ptr<const io::BvhLayout> bvh_source_;
   Document doc_;
   Playback playback_;
   History history_;

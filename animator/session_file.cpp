@@ -44,8 +44,8 @@ bool SessionWriteError::out_of_space() const {
 }
 
 SessionImage session_image(const Session& session) {
-  return SessionImage{session.model_ptr(), session.character(), session.document(),
-                      session.playback(), 0};
+  return SessionImage{session.model_ptr(), session.character(),  session.document(),
+                      session.playback(),  session.bvh_source(), 0};
 }
 
 json session_to_json(const SessionImage& image, bool include_character) {
@@ -70,6 +70,9 @@ json session_to_json(const SessionImage& image, bool include_character) {
       {"playback", playback_to_json(image.playback)},
   };
   out["clip"] = d.clip ? clip_to_json(*d.clip) : json(nullptr);
+  if (include_character && image.bvh_source) {
+    out["bvh_source"] = bvh_source_to_json(*image.bvh_source);
+  }
   if (image.journal_seq > 0) out["journal_seq"] = image.journal_seq;
   return out;
 }
@@ -104,6 +107,8 @@ std::unique_ptr<Session> session_from_json(const json& j,
     const Playback p = read_playback(f, doc["playback"]);
     const auto seq = f.integer_or(doc["journal_seq"], 0, 0, kMaxJournalSeq);
     session->restore(std::move(d), p);
+    // files written before BVH sources were kept have none
+    if (doc["bvh_source"]) session->set_bvh_source(read_bvh_source(f, doc["bvh_source"]));
     if (journal_seq) *journal_seq = static_cast<std::uint64_t>(seq);
     return session;
   });

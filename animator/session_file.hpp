@@ -40,11 +40,13 @@ struct SessionImage {
   std::string character;
   Document document;
   Playback playback;
+  std::shared_ptr<const io::BvhLayout> bvh_source;  // Session::bvh_source; null: none
   std::uint64_t journal_seq = 0;  // the last journal record the image holds; 0: none
 };
 SessionImage session_image(const Session& session);
 
-/// The session as JSON. Without the character it is the document alone (cheap to compare).
+/// The session as JSON. Without the character it is the document alone (cheap to compare); with
+/// it, also the character's BVH source ("bvh_source", absent when it has none).
 nlohmann::json session_to_json(const SessionImage& image, bool include_character = true);
 nlohmann::json session_to_json(const Session& session, bool include_character = true);
 

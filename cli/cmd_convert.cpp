@@ -14,7 +14,7 @@ namespace cli {
 namespace {
 
 struct ConvertArgs {
-  std::string in, out, order;
+  std::string in, out, order, units;
   std::optional<double> scale, fps;
   bool quiet = false;
 };
@@ -27,12 +27,18 @@ void convert(const ConvertArgs& a) {
                                 " (rule: the extension must be .bvh, .gltf or .glb)");
   }
   const bool bvh_in = in_format == ClipFormat::kBvh, bvh_out = out_format == ClipFormat::kBvh;
+  // "source" (or no option) keeps a BVH input's unit and per-joint orders (io/bvh_writer.hpp)
+  ClipWriteOptions wo;
   if (!a.order.empty()) {
     if (!bvh_out) throw std::invalid_argument("--order: applies to a BVH output only");
-    if (!io::parse_rotation_order(a.order)) {
-      throw std::invalid_argument("--order: '" + a.order +
-                                  "' (rule: a permutation of X, Y, Z such as ZXY)");
+    wo.bvh_order = io::parse_bvh_order(a.order, "--order");
+  }
+  if (!a.units.empty()) {
+    if (!bvh_out) throw std::invalid_argument("--units: applies to a BVH output only");
+    if (a.scale && !bvh_in) {
+      throw std::invalid_argument("--units: not with --scale, which sets the BVH output's unit");
     }
+    wo.bvh_scale = io::parse_bvh_units(a.units, "--units");
   }
   if (a.scale && !(std::isfinite(*a.scale) && *a.scale > 0)) {
     throw std::invalid_argument("--scale: must be a positive number (metres per BVH file unit)");
@@ -49,9 +55,7 @@ void convert(const ConvertArgs& a) {
   ro.progress = [&bar](double f) { bar.update(0.5 * f); };
   const ClipFile clip = read_clip_file(a.in, ro);
 
-  ClipWriteOptions wo;
-  if (!a.order.empty()) wo.bvh_order = a.order;
-  if (bvh_out && !bvh_in) wo.bvh_scale = a.scale;
+  if (bvh_out && !bvh_in && a.scale) wo.bvh_scale = a.scale;
   wo.progress = [&bar](double f) { bar.update(0.5 + 0.5 * f); };
   write_clip_file(a.out, clip, clip.clip, wo);
   bar.update(1.0);
@@ -71,12 +75,15 @@ void add_convert_command(CLI::App& app) {
   cmd->add_option("IN", args->in, "input clip (.bvh, .gltf, .glb, .fbx, .dae)")->required();
   cmd->add_option("OUT", args->out, "output clip (.bvh, .gltf, .glb)")->required();
   cmd->add_option("--order", args->order,
-                  "BVH output rotation order, e.g. ZXY (default: the "
-                  "input's orders for a BVH input, else ZXY)");
+                  "BVH output rotation order for every joint: XYZ, XZY, YXZ, YZX, ZXY, ZYX, or "
+                  "source (the default): each joint's order in a BVH input, else ZXY");
+  cmd->add_option("--units", args->units,
+                  "BVH output unit: m, cm, or source (the default): the unit of a BVH input, "
+                  "else metres (or --scale)");
   cmd->add_option("--scale", args->scale,
                   "metres per BVH file unit: of the input when it is "
                   "BVH (default: chosen from the skeleton's size; the "
-                  "output keeps it), else of the BVH output (default 1)");
+                  "output keeps it unless --units), else of the BVH output (default 1)");
   cmd->add_option("--fps", args->fps, "resample the clip at this frame rate");
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] {

@@ -191,6 +191,22 @@ std::string sanitize_bvh_name(std::string_view name) {
   return s.empty() ? "joint" : s;
 }
 
+std::optional<double> parse_bvh_units(std::string_view value, std::string_view option) {
+  using bvh_detail::iequals;
+  if (iequals(value, "m")) return 1.0;
+  if (iequals(value, "cm")) return 0.01;
+  if (iequals(value, "source")) return std::nullopt;
+  throw std::invalid_argument(std::string(option) + ": '" + std::string(value) +
+                              "' (rule: one of m, cm, source)");
+}
+
+std::optional<std::string> parse_bvh_order(std::string_view value, std::string_view option) {
+  if (bvh_detail::iequals(value, "source")) return std::nullopt;
+  if (const auto order = parse_rotation_order(value)) return to_string(*order);
+  throw std::invalid_argument(std::string(option) + ": '" + std::string(value) +
+                              "' (rule: one of XYZ, XZY, YXZ, YZX, ZXY, ZYX, source)");
+}
+
 BvhDocument make_bvh_document(const Model& model,
                               const Clip& clip,
                               const BvhExportOptions& options) {

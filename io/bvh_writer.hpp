@@ -58,6 +58,16 @@ void save_bvh_file(const Model& model,
                    const std::string& path,
                    const BvhExportOptions& options = {});
 
+/// The value of a units option as BvhExportOptions::scale: "m" (metres: 1), "cm" (centimetres:
+/// 0.01) or "source" (empty: the layout's unit, metres without one); case-insensitive.
+/// @throws std::invalid_argument "<option>: '<value>' (rule: one of m, cm, source)"
+std::optional<double> parse_bvh_units(std::string_view value, std::string_view option);
+/// The value of a rotation order option as BvhExportOptions::rotation_order: one of the six
+/// orders ("XYZ", ..., "ZYX", any case; returned in upper case) for every joint, or "source"
+/// (empty: each joint's order in the layout, ZXY without one).
+/// @throws std::invalid_argument "<option>: '<value>' (rule: one of XYZ, ..., source)"
+std::optional<std::string> parse_bvh_order(std::string_view value, std::string_view option);
+
 /// `name` with every byte outside [A-Za-z0-9_] replaced by '_' ("joint" when empty).
 std::string sanitize_bvh_name(std::string_view name);
 

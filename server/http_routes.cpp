@@ -154,6 +154,27 @@ std::optional<int> int_param(
   return value;
 }
 
+// `units` (m, cm, source) and `order` (XYZ, ..., ZYX, source) of a BVH export; source, the
+// default, is the character's BVH file when it came from one (io/bvh_writer.hpp). A bad value
+// or one given with another format is a 400 naming the parameter (and throws).
+io::BvhExportOptions bvh_params(const httplib::Request& req,
+                                const std::string& format,
+                                httplib::Response& res) {
+  io::BvhExportOptions o;
+  try {
+    const bool units = req.has_param("units"), order = req.has_param("order");
+    if ((units || order) && format != "bvh") {
+      throw std::invalid_argument(std::string(units ? "units" : "order") + ": needs format=bvh");
+    }
+    if (units) o.scale = io::parse_bvh_units(req.get_param_value("units"), "units");
+    if (order) o.rotation_order = io::parse_bvh_order(req.get_param_value("order"), "order");
+  } catch (const std::invalid_argument& e) {
+    send_error(res, 400, e.what());
+    throw;
+  }
+  return o;
+}
+
 // The saved sessions: the list (no tokens) and deleting one with its token.
 void register_session_list(httplib::Server& http, const RouteContext& ctx) {
   http.Get("/api/sessions", [&ctx](const httplib::Request& req, httplib::Response& res) {
@@ -320,9 +341,11 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       return send_error(res, 400, "format: must be bvh, gltf or glb");
     }
     std::optional<int> first, last;
+    io::BvhExportOptions bvh;
     try {
       first = int_param(req, "first", res, 0, kMaxFrameParam);
       last = int_param(req, "last", res, 0, kMaxFrameParam);
+      bvh = bvh_params(req, format, res);
     } catch (const std::invalid_argument&) {
       return;
     }
@@ -330,18 +353,21 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       core::Clip clip;
       std::string name;
       const core::SkinnedMesh* skin;
+      std::shared_ptr<const io::BvhLayout> bvh_source;
     };
     // only the frames asked for are sampled; the whole animation is refused when it is longer
     // than the clip budget (a session restored from a file made under other limits)
     const Animation a = actor->call_within(ctx.call_timeout, [first, last](animator::Session& s) {
       const std::int64_t end = s.animation_frames() - 1;
       return Animation{s.animation_clip(first.value_or(0), last.value_or(end)), s.character(),
-                       s.skin()};
+                       s.skin(), s.bvh_source()};
     });
     const std::string file_name = safe_file_name(a.name, "animation") + "." + format;
     try {
       if (format == "bvh") {
-        set_uncompressed(res, io::write_bvh(actor->model(), a.clip), "text/plain; charset=utf-8");
+        bvh.layout = a.bvh_source.get();
+        set_uncompressed(res, io::write_bvh(actor->model(), a.clip, bvh),
+                         "text/plain; charset=utf-8");
       } else if (format == "gltf") {
         res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}),
                         "model/gltf+json");

@@ -143,6 +143,7 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
     io::BvhImport imported = load_bvh(path, limits);
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
+    session->set_bvh_source(std::make_shared<const io::BvhLayout>(std::move(imported.layout)));
     if (imported.clip.size() > 1) session->set_clip(std::move(imported.clip), "import clip");
     return session;
   }

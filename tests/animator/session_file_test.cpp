@@ -1,6 +1,7 @@
 // Tests for reading session files (animator/session_file.hpp): bad files are refused with the
 // field named as a JSON pointer (or the line and column of a syntax error), integers are range
-// checked instead of wrapped, and the solver settings refuse unknown keys.
+// checked instead of wrapped, the solver settings refuse unknown keys, and a character's BVH
+// source is kept.
 #include "animator/session_file.hpp"
 
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "core/human_figure.hpp"
+#include "io/bvh.hpp"
 
 namespace {
 
@@ -124,6 +126,65 @@ TEST(SessionFile, DamagedFilesNameTheLineAndColumn) {
   } catch (const SessionError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/session.json"), std::string::npos);
   }
+}
+
+// A two-joint BVH in centimetres with different orders per joint.
+constexpr const char* kMixedOrders =
+    "HIERARCHY\nROOT Hips\n{\nOFFSET 0 0 0\n"
+    "CHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation\n"
+    "JOINT Chest\n{\nOFFSET 0 85.5 0\nCHANNELS 3 Zrotation Yrotation Xrotation\n"
+    "End Site\n{\nOFFSET 0 80.25 0\n}\n}\n}\nMOTION\nFrames: 2\nFrame Time: 0.01\n"
+    "1 90 2 10 20 30 40 -50 60\n2 91 3 11 21 31 41 -51 61\n";
+
+TEST(SessionFile, TheBvhSourceOfTheCharacterIsSavedAndRead) {
+  io::BvhImport imp = io::load_bvh_string(kMixedOrders, "mixed.bvh");
+  ASSERT_DOUBLE_EQ(imp.layout.scale, 0.01);
+  Session s(imp.model, "mixed");
+  s.set_clip(imp.clip, "import clip");
+  EXPECT_FALSE(session_to_json(s).contains("bvh_source"));  // none yet
+  s.set_bvh_source(std::make_shared<const io::BvhLayout>(imp.layout));
+  const json j = session_to_json(s);
+  EXPECT_EQ(j.at("bvh_source").at("joints").at(1),
+            json({{"name", "Chest"}, {"channels", {"Zrotation", "Yrotation", "Xrotation"}}}));
+  EXPECT_FALSE(session_to_json(s, /*include_character=*/false).contains("bvh_source"));
+
+  const auto loaded = session_from_json(j, "test.json");
+  ASSERT_TRUE(loaded->bvh_source());
+  const io::BvhLayout& layout = *loaded->bvh_source();
+  EXPECT_EQ(layout.scale, imp.layout.scale);
+  ASSERT_EQ(layout.joints.size(), imp.layout.joints.size());
+  for (std::size_t k = 0; k < layout.joints.size(); ++k) {
+    EXPECT_EQ(layout.joints[k].name, imp.layout.joints[k].name);
+    EXPECT_EQ(layout.joints[k].channels, imp.layout.joints[k].channels);
+  }
+  // the reloaded session exports the same file as the one it was saved from
+  io::BvhExportOptions before, after;
+  before.layout = &imp.layout;
+  after.layout = loaded->bvh_source().get();
+  EXPECT_EQ(io::write_bvh(loaded->model(), *loaded->clip(), after),
+            io::write_bvh(*imp.model, imp.clip, before));
+}
+
+TEST(SessionFile, BadBvhSourcesAreNamed) {
+  Session s(io::load_bvh_string(kMixedOrders, "mixed.bvh").model, "mixed");
+  s.set_bvh_source(
+      std::make_shared<const io::BvhLayout>(io::load_bvh_string(kMixedOrders, "m.bvh").layout));
+  const json good = session_to_json(s);
+  json j = good;
+  j["bvh_source"]["joints"][1]["channels"][0] = "Wrotation";
+  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/channels/0: 'Wrotation' is not a BVH channel");
+  j = good;
+  j["bvh_source"]["joints"][1]["channels"][1] = "Zrotation";
+  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/channels/1: 'Zrotation' is listed twice");
+  j = good;
+  j["bvh_source"]["joints"][1]["name"] = "Hips";
+  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/name: names a joint twice");
+  j = good;
+  j["bvh_source"]["scale"] = 0;
+  EXPECT_EQ(error_of(j), "/bvh_source/scale: must be positive (metres per file unit)");
+  j = good;
+  j.erase("bvh_source");
+  EXPECT_EQ(error_of(j), "");
 }
 
 }  // namespace

@@ -115,6 +115,63 @@ TEST(ConvertCommand, BvhToBvhWithOrderAndRate) {
   EXPECT_LT(worst, 1e-4 * height) << "worst joint position error " << worst << " m";
 }
 
+// rotation channels of every joint, e.g. "ZXY"
+std::vector<std::string> orders(const io::BvhDocument& doc) {
+  std::vector<std::string> out;
+  for (const io::BvhNode& node : doc.nodes) {
+    if (node.is_end_site()) continue;
+    std::string order;
+    for (io::BvhChannel c : node.channels) {
+      if (io::is_rotation(c)) order += static_cast<char>('X' + io::channel_axis(c));
+    }
+    out.push_back(order);
+  }
+  return out;
+}
+
+TEST(ConvertCommand, BvhToBvhKeepsTheSourceUnitAndOrdersUnlessAsked) {
+  gltf_test::TempDir dir;
+  const std::string in = dir.path("cm.bvh");
+  std::ofstream(in) << "HIERARCHY\nROOT Hips\n{\nOFFSET 0 0 0\n"
+                       "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                       "JOINT Chest\n{\nOFFSET 0 85.5 -1.25\n"
+                       "CHANNELS 3 Zrotation Yrotation Xrotation\n"
+                       "End Site\n{\nOFFSET 0 80.25 0\n}\n}\n}\nMOTION\nFrames: 2\n"
+                       "Frame Time: 0.01\n1.5 90 2 10 20 30 40 -50 60\n2 91 3 11 21 31 41 -51 61\n";
+  const io::BvhDocument src = read_bvh(in);
+  // default and "source": centimetres, each joint's order, the same values
+  for (const std::string options : {"", " --units source --order source"}) {
+    const std::string out = dir.path("same.bvh");
+    const Outcome r = pindrag(dir, "convert " + in + " " + out + options + " --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const io::BvhDocument got = read_bvh(out);
+    EXPECT_EQ(orders(got), (std::vector<std::string>{"ZXY", "ZYX"})) << options;
+    ASSERT_EQ(got.nodes.size(), src.nodes.size());
+    for (std::size_t k = 0; k < got.nodes.size(); ++k) {
+      EXPECT_TRUE(got.nodes[k].offset.isApprox(src.nodes[k].offset, 1e-9)) << options;
+    }
+    ASSERT_EQ(got.values.size(), src.values.size());
+    for (std::size_t k = 0; k < got.values.size(); ++k) {
+      EXPECT_NEAR(got.values[k], src.values[k], 1e-6) << options;
+    }
+  }
+  // asked: metres, XYZ on every joint
+  const std::string out = dir.path("m_xyz.bvh");
+  const Outcome r = pindrag(dir, "convert " + in + " " + out + " --units m --order xyz --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const io::BvhDocument got = read_bvh(out);
+  EXPECT_EQ(orders(got), (std::vector<std::string>{"XYZ", "XYZ"}));
+  EXPECT_NEAR(got.nodes[1].offset.y(), 0.855, 1e-9);
+  EXPECT_NEAR(got.frame(1)[1], 0.91, 1e-9);
+  // --units and --scale both setting the unit of a BVH written from glTF is refused
+  const std::string glb = dir.path("cm.glb");
+  ASSERT_EQ(pindrag(dir, "convert " + in + " " + glb + " --quiet").status, 0);
+  const Outcome both =
+      pindrag(dir, "convert " + glb + " " + dir.path("b.bvh") + " --units cm --scale 0.01");
+  EXPECT_NE(both.status, 0);
+  EXPECT_NE(both.err.find("--units: not with --scale"), std::string::npos) << both.err;
+}
+
 TEST(ConvertCommand, BadInputsExitNonZeroNamingTheProblem) {
   PINDRAG_REQUIRE_DATA_DIR();
   gltf_test::TempDir dir;
@@ -124,7 +181,12 @@ TEST(ConvertCommand, BadInputsExitNonZeroNamingTheProblem) {
   };
   const std::vector<Case> cases = {
       {"convert " + walk() + " " + dir.path("out.txt"), "OUT: "},
-      {"convert " + walk() + " " + out + " --order XXY", "--order: 'XXY'"},
+      {"convert " + walk() + " " + out + " --order XXY",
+       "--order: 'XXY' (rule: one of XYZ, XZY, YXZ, YZX, ZXY, ZYX, source)"},
+      {"convert " + walk() + " " + out + " --units ft",
+       "--units: 'ft' (rule: one of m, cm, source)"},
+      {"convert " + walk() + " " + dir.path("o.glb") + " --units cm",
+       "--units: applies to a BVH output only"},
       {"convert " + walk() + " " + dir.path("o.glb") + " --order ZXY",
        "--order: applies to a BVH output only"},
       {"convert " + walk() + " " + out + " --scale -1", "--scale: must be a positive number"},
