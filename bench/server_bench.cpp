@@ -5,6 +5,15 @@
 // receiving the first pose frame whose "last applied seq" is N.
 //
 //   server_bench [--seconds S] [--sessions N,N,...]   (default: 5 s; 1 and 50 sessions)
+//
+// With --mixed it runs the server under mixed load instead (bench/server_load_mixed.hpp):
+//
+//   server_bench --mixed [--seconds S] [--sessions N] [--mixed-clients K] [--max-rss-mib M]
+//                [--max-live-sessions L]
+//                (default: 60 s, 50 sessions, 4 other clients, no memory bound, the server's
+//                default live-session limit)
+//
+// and exits 1 when a request failed or the peak resident memory exceeded M MiB.
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -21,96 +30,24 @@
 #include <thread>
 #include <vector>
 
+#include "bench/server_bench_clients.hpp"
+#include "bench/server_load_mixed.hpp"
 #include "server/server.hpp"
 #include "tests/server/ws_test_client.hpp"
 
-#include <httplib.h>  // after the server's headers (Eigen): see server/http_routes.hpp
-
 namespace {
 
-using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
-constexpr auto kFramePeriod = std::chrono::microseconds(16667);  // 60 Hz
-
-struct Session {
-  std::string id, token;
-};
-
-Session create_session(int port) {
-  httplib::Client c("127.0.0.1", port);
-  const auto res = c.Post("/api/sessions", R"({"character": "human48"})", "application/json");
-  if (!res || res->status != 201) throw std::runtime_error("cannot create a session");
-  const json j = json::parse(res->body);
-  return {j.at("id"), j.at("token")};
-}
-
-double resident_mib() {
-  std::ifstream statm("/proc/self/statm");
-  long pages_total = 0, pages_resident = 0;
-  statm >> pages_total >> pages_resident;
-  return static_cast<double>(pages_resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) /
-         (1024.0 * 1024.0);
-}
-
-std::array<double, 3> hand_position(const json& snapshot) {
-  for (const json& l : snapshot.at("links")) {
-    if (l.at("name") == "r_hand") return {l.at("p")[0], l.at("p")[1], l.at("p")[2]};
-  }
-  throw std::runtime_error("no r_hand");
-}
-
-// One client dragging for `seconds`; appends its latencies (ms).
-void drag_client(const server::Server& srv,
-                 const Session& s,
-                 double seconds,
-                 std::vector<double>& latencies,
-                 std::atomic<int>& failures) {
-  try {
-    const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
-    server_test::WsClient ws(srv.ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin);
-    ws.send({{"type", "hello"}, {"protocol", 1}});
-    const auto start = hand_position(ws.read_until("snapshot"));
-    ws.send({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}});
-    const auto t_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(seconds));
-    auto next = Clock::now();
-    for (std::uint32_t seq = 1; Clock::now() < t_end; ++seq) {
-      std::this_thread::sleep_until(next);
-      next += kFramePeriod;
-      const double phase = 2 * M_PI * seq / 120.0;  // a 2 s circle of 10 cm radius
-      const auto sent = Clock::now();
-      ws.send(
-          {{"type", "drag_move"},
-           {"seq", seq},
-           {"target",
-            {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
-      for (;;) {
-        const auto m = ws.read();
-        if (m.text) continue;
-        if (server_test::decode_pose(m.data).last_seq >= seq) break;
-      }
-      latencies.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
-      if (Clock::now() > next) next = Clock::now();  // late: do not send a catch-up burst
-    }
-    ws.send({{"type", "drag_end"}});
-    ws.close();
-  } catch (const std::exception& e) {
-    std::cerr << "client failed: " << e.what() << "\n";
-    ++failures;
-  }
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::ceil(p / 100.0 * v.size())) - 1);
-  return v[k];
-}
+using server_bench::create_session;
+using server_bench::drag_client;
+using server_bench::percentile;
+using server_bench::resident_mib;
+using server_bench::SessionRef;
 
 void latency_run(server::Server& srv, int sessions, double seconds) {
-  std::vector<Session> list;
+  std::vector<SessionRef> list;
   for (int k = 0; k < sessions; ++k) list.push_back(create_session(srv.http_port()));
   std::vector<std::vector<double>> latencies(static_cast<size_t>(sessions));
   std::atomic<int> failures{0};
@@ -132,7 +69,7 @@ void latency_run(server::Server& srv, int sessions, double seconds) {
 // A client that subscribes and then reads nothing for `stall` seconds while another client drags
 // the same session at 60 Hz: the server keeps one pending pose for it, so memory stays flat.
 void stalled_reader_run(server::Server& srv, double stall) {
-  const Session s = create_session(srv.http_port());
+  const SessionRef s = create_session(srv.http_port());
   const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
   server_test::WsClient stalled(srv.ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin);
   stalled.send({{"type", "hello"}, {"protocol", 1}});
@@ -171,26 +108,57 @@ void stalled_reader_run(server::Server& srv, double stall) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: server_bench [--seconds S] [--sessions N,N,...]\n"
+    "       server_bench --mixed [--seconds S] [--sessions N] [--mixed-clients K] "
+    "[--max-rss-mib M] [--max-live-sessions L]\n";
+
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   double seconds = 5;
   std::vector<int> session_counts{1, 50};
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--seconds") {
-      seconds = std::stod(argv[i + 1]);
-    } else if (flag == "--sessions") {
-      session_counts.clear();
-      std::string list = argv[i + 1];
-      for (size_t at = 0; at < list.size();) {
-        const size_t comma = std::min(list.find(',', at), list.size());
-        session_counts.push_back(std::stoi(list.substr(at, comma - at)));
-        at = comma + 1;
+  bool mixed = false, seconds_given = false, sessions_given = false;
+  server_bench::MixedLoadOptions mixed_options;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string flag = argv[i];
+      if (flag == "--mixed") {
+        mixed = true;
+        continue;
       }
-    } else {
-      std::cerr << "usage: server_bench [--seconds S] [--sessions N,N,...]\n";
-      return 2;
+      if (i + 1 >= argc) throw std::invalid_argument(flag);
+      const std::string value = argv[++i];
+      if (flag == "--seconds") {
+        seconds = std::stod(value);
+        seconds_given = true;
+      } else if (flag == "--sessions") {
+        session_counts.clear();
+        for (size_t at = 0; at < value.size();) {
+          const size_t comma = std::min(value.find(',', at), value.size());
+          session_counts.push_back(std::stoi(value.substr(at, comma - at)));
+          at = comma + 1;
+        }
+        sessions_given = true;
+      } else if (flag == "--mixed-clients") {
+        mixed_options.clients = std::stoi(value);
+      } else if (flag == "--max-rss-mib") {
+        mixed_options.max_rss_mib = std::stod(value);
+      } else if (flag == "--max-live-sessions") {
+        mixed_options.max_live_sessions = std::stoul(value);
+      } else {
+        throw std::invalid_argument(flag);
+      }
     }
+    if (mixed && sessions_given && session_counts.size() != 1) throw std::invalid_argument("");
+  } catch (const std::exception&) {
+    std::cerr << kUsage;
+    return 2;
+  }
+  if (mixed) {
+    // the mixed load: its own server, over a data folder (bench/server_load_mixed.hpp)
+    if (seconds_given) mixed_options.seconds = seconds;
+    if (sessions_given) mixed_options.sessions = session_counts.front();
+    return server_bench::run_mixed_load(mixed_options);
   }
   const fs::path web =
       fs::temp_directory_path() / ("pindrag-server-bench-" + std::to_string(::getpid()));

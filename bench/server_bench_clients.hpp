@@ -1,0 +1,35 @@
+// The clients of the server timing programs (server_bench): creating a session over HTTP, a
+// client dragging its session's right hand at 60 Hz over the WebSocket and timing each drag_move
+// to the pose frame that applies it, percentiles, and the process's resident memory.
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "server/server.hpp"
+
+namespace server_bench {
+
+struct SessionRef {
+  std::string id, token;
+};
+
+/// A human48 session. @throws std::runtime_error unless the server answers 201
+SessionRef create_session(int port);
+
+/// Drags the right hand of `s` on a 2 s circle at 60 Hz for `seconds`, appending each drag_move →
+/// pose round trip (ms) to `latencies`; a client that fails prints why and increments `failures`.
+void drag_client(const server::Server& srv,
+                 const SessionRef& s,
+                 double seconds,
+                 std::vector<double>& latencies,
+                 std::atomic<int>& failures);
+
+/// The p-th percentile (nearest rank) of `v`; NaN when it is empty.
+double percentile(std::vector<double> v, double p);
+
+/// This process's resident memory (/proc/self/statm), MiB.
+double resident_mib();
+
+}  // namespace server_bench
