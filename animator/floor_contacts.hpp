@@ -7,10 +7,10 @@
 // a link whose parent rests on the floor goes with its parent (a toe with its foot). During the
 // gesture, a link that a step carried below the floor is pinned where it went in, lifted back
 // onto it. A link that was already below the floor when the gesture began (a pose placed a little
-// into it) is held from going deeper than it was, not pushed out. A resting box (a foot) is held in its whole pose, so it stays flat; any other shape
-// (a knee, a hand) by its lowest point only, so it can roll on the floor. The pins go on the
-// level the session's pins go on (ik::pin_priority), so with hard pins a drag that would lift a
-// resting foot stops short instead.
+// into it) is held from going deeper than it was, not pushed out. A resting box (a foot) is held in
+// its whole pose, so it stays flat; any other shape (a knee, a hand) by its lowest point only, so
+// it can roll on the floor. The pins go on the level the session's pins go on (ik::pin_priority),
+// so with hard pins a drag that would lift a resting foot stops short instead.
 #pragma once
 
 #include <vector>

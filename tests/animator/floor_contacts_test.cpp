@@ -60,7 +60,7 @@ double deepest(const Session& s, const FloorContacts& floor, const std::vector<d
 struct Gesture {
   double feet_drift = 0;  // largest distance of a foot from where it stood (m)
   double deepest = -std::numeric_limits<double>::infinity();  // below the floor, any frame
-  Vector3 link_end = Vector3::Zero();                        // where the dragged link ended
+  Vector3 link_end = Vector3::Zero();                         // where the dragged link ended
   double deepest_at_rest = 0;  // below the floor once the figure has settled after the drag
 };
 
