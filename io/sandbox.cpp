@@ -152,80 +152,60 @@ bool write_all(int fd, const void* bytes, std::size_t size) {
   return true;
 }
 
-SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const SandboxLimits& limits) {
-  SandboxResult result;
-  int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) {
-    result.message = std::string("cannot create a pipe: ") + std::strerror(errno);
-    return result;
-  }
-  const pid_t parent = ::getpid();
-  const auto deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(std::max(0.0, limits.timeout_seconds)));
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    result.message = std::string("cannot start a child process: ") + std::strerror(errno);
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return result;
-  }
-  if (pid == 0) child_main(work, limits, fds[1], parent);
-  ::close(fds[1]);
+namespace {
 
-  // read until end of file, the deadline or the size cap
-  bool timed_out = false, too_large = false;
+enum class ReadEnd { kEndOfFile, kTimedOut, kTooLarge };
+
+// reads the child's reply until end of file, the deadline or the size cap
+ReadEnd read_reply(int fd, Clock::time_point deadline, std::size_t max_bytes, std::string& reply) {
   char buf[1 << 16];
   for (;;) {
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) {
-      timed_out = true;
-      break;
-    }
-    pollfd p{fds[0], POLLIN, 0};
+    if (left.count() <= 0) return ReadEnd::kTimedOut;
+    pollfd p{fd, POLLIN, 0};
     const int r = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 1000)));
-    if (r < 0 && errno != EINTR) break;
+    if (r < 0 && errno != EINTR) return ReadEnd::kEndOfFile;
     if (r <= 0) continue;
-    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    const ssize_t n = ::read(fd, buf, sizeof buf);
     if (n < 0) {
       if (errno == EINTR || errno == EAGAIN) continue;
-      break;
+      return ReadEnd::kEndOfFile;
     }
-    if (n == 0) break;
-    if (result.reply.size() + static_cast<std::size_t>(n) > limits.max_reply_bytes) {
-      too_large = true;
-      break;
-    }
-    result.reply.append(buf, static_cast<std::size_t>(n));
+    if (n == 0) return ReadEnd::kEndOfFile;
+    if (reply.size() + static_cast<std::size_t>(n) > max_bytes) return ReadEnd::kTooLarge;
+    reply.append(buf, static_cast<std::size_t>(n));
   }
-  ::close(fds[0]);
+}
 
-  // the pipe is closed: wait for the exit until the deadline, then kill
-  int wstatus = 0;
-  double cpu = 0;
-  if (!timed_out && !too_large) {
-    for (;;) {
-      rusage ru{};
-      const pid_t w = ::wait4(pid, &wstatus, WNOHANG, &ru);
-      if (w == pid) {
-        cpu = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-              1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-        break;
-      }
-      if (w < 0 && errno != EINTR) break;
-      if (Clock::now() >= deadline) {
-        timed_out = true;
-        reap(pid, true, wstatus, cpu);
-        break;
-      }
-      const timespec ts{0, 1000000};  // 1 ms
-      ::nanosleep(&ts, nullptr);
+// the pipe is closed: waits for the child's exit until the deadline, then kills it; false when
+// the deadline passed
+bool wait_for_exit(pid_t pid, Clock::time_point deadline, int& wstatus, double& cpu) {
+  for (;;) {
+    rusage ru{};
+    const pid_t w = ::wait4(pid, &wstatus, WNOHANG, &ru);
+    if (w == pid) {
+      cpu = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+            1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+      return true;
     }
-  } else {
-    reap(pid, true, wstatus, cpu);
+    if (w < 0 && errno != EINTR) return true;
+    if (Clock::now() >= deadline) {
+      reap(pid, true, wstatus, cpu);
+      return false;
+    }
+    const timespec ts{0, 1000000};  // 1 ms
+    ::nanosleep(&ts, nullptr);
   }
+}
 
+// what the child's end means for the caller
+void classify(SandboxResult& result,
+              const SandboxLimits& limits,
+              bool timed_out,
+              bool too_large,
+              int wstatus,
+              double cpu) {
   result.exit_status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : -1;
   result.signal = WIFSIGNALED(wstatus) ? WTERMSIG(wstatus) : 0;
   if (too_large) {
@@ -255,6 +235,43 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
   } else {
     result.status = SandboxStatus::kOk;
   }
+}
+
+}  // namespace
+
+SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const SandboxLimits& limits) {
+  SandboxResult result;
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) {
+    result.message = std::string("cannot create a pipe: ") + std::strerror(errno);
+    return result;
+  }
+  const pid_t parent = ::getpid();
+  const auto deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double>(std::max(0.0, limits.timeout_seconds)));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    result.message = std::string("cannot start a child process: ") + std::strerror(errno);
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return result;
+  }
+  if (pid == 0) child_main(work, limits, fds[1], parent);
+  ::close(fds[1]);
+
+  const ReadEnd end = read_reply(fds[0], deadline, limits.max_reply_bytes, result.reply);
+  ::close(fds[0]);
+  bool timed_out = end == ReadEnd::kTimedOut;
+  const bool too_large = end == ReadEnd::kTooLarge;
+  int wstatus = 0;
+  double cpu = 0;
+  if (!timed_out && !too_large) {
+    timed_out = !wait_for_exit(pid, deadline, wstatus, cpu);
+  } else {
+    reap(pid, true, wstatus, cpu);
+  }
+  classify(result, limits, timed_out, too_large, wstatus, cpu);
   return result;
 }
 
