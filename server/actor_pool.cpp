@@ -133,7 +133,9 @@ void ActorPool::work() {
     if (deadlines_.empty()) {
       ready_or_due_.wait(lock);
     } else {
-      ready_or_due_.wait_until(lock, deadlines_.begin()->first);
+      // a copy: the set's node may be erased while this worker waits
+      const Clock::time_point due = deadlines_.begin()->first;
+      ready_or_due_.wait_until(lock, due);
     }
   }
 }
