@@ -24,6 +24,7 @@ Session::Session(std::shared_ptr<const core::Model> model, std::string character
   doc_.settings.floor = true;      // posing stays on the floor (animator/floor_contacts.hpp)
   floor_ = std::make_unique<FloorContacts>(*model_);
   solver_ = std::make_unique<ik::Solver>(*model_, doc_.settings);
+  pin_hold_ = std::make_unique<ik::PinHold>(*model_);
   refresh_kinematics();
 }
 
@@ -318,7 +319,7 @@ void Session::rebuild_problem() {
     ik::LinkTask d = drag_task();
     // feed-forward: the target's motion since the last step (Yamane eq. 8.8)
     d.velocity_W = (d.target_W - drag_->previous_target_W) / doc_.settings.dt;
-    problem_.add(d);
+    ik::add_drag(d, doc_.settings, problem_);
   }
 }
 
@@ -372,18 +373,27 @@ bool Session::solve_step() {
     floor_gesture_ = false;
     return false;
   }
-  const ik::Report* r = &solver_->step(problem_, data_, doc_.q);
+  frame_start_q_ = doc_.q;
+  solver_->step(problem_, data_, doc_.q);
   if (drag_) drag_->previous_target_W = drag_task().target_W;
   // links the step carried below the floor are held on it, and lifted back within this frame
   bool went_under = false;
   for (int k = 0; k < kFloorCorrections && went_under_floor(); ++k) {
     went_under = true;
     rebuild_problem();
-    r = &solver_->step(problem_, data_, doc_.q);
+    solver_->step(problem_, data_, doc_.q);
   }
-  // keep ticking while anything still moves noticeably (pins recovering after a drag)
+  // hard pins are brought back within a tenth of a millimetre before the frame is shown
+  if (pin_hold_->hold(doc_.settings, problem_, data_, doc_.q).corrections > 0) {
+    solver_->refresh_report(problem_, data_, doc_.q);  // the readouts show the corrected pose
+  }
+  // keep ticking while anything still moves noticeably (pins recovering after a drag). The
+  // frame's net motion counts, not a step's: a step and the pins' correction may undo each
+  // other on every frame of a figure at rest.
   constexpr double kRestSpeed = 1e-3;  // rad/s: under 2e-5 rad per frame, invisible
-  settling_ = drag_.has_value() || went_under || r->max_joint_speed > kRestSpeed;
+  const double frame_speed =
+      (doc_.q - frame_start_q_).cwiseAbs().maxCoeff() / std::max(doc_.settings.dt, 1e-9);
+  settling_ = drag_.has_value() || went_under || frame_speed > kRestSpeed;
   if (!settling_) floor_gesture_ = false;  // the gesture has come to rest
   return true;
 }

@@ -31,6 +31,7 @@
 #include "core/data.hpp"
 #include "core/model.hpp"
 #include "core/skin.hpp"
+#include "ik/pin_hold.hpp"
 #include "ik/solver.hpp"
 
 namespace io {
@@ -305,6 +306,9 @@ class Session {
   core::Data data_;
   ik::Problem problem_;
   std::unique_ptr<ik::Solver> solver_;
+  std::unique_ptr<ik::PinHold>
+      pin_hold_;                   // hard pins held to a tenth of a millimetre after every step
+  Eigen::VectorXd frame_start_q_;  // the pose before this frame's solver step
   bool settling_ = false;
   // the floor in kinematic posing (settings.floor): contacts held for the gesture being solved
   std::unique_ptr<FloorContacts> floor_;

@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <kdl/treefksolverpos_recursive.hpp>
 #include <kdl/treeiksolvervel_wdls.hpp>
 
@@ -12,6 +13,7 @@
 #include "core/human_figure.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
+#include "ik/pin_hold.hpp"
 #include "ik/solver.hpp"
 
 namespace {
@@ -154,7 +156,57 @@ void BM_IkStep_KDL(benchmark::State& state) {
   }
 }
 
+// One posing frame of a squat at its hardest, the first: both feet pinned (6-D), the pelvis
+// dragged 8.3 mm down (0.5 m/s at 60 Hz) from the rest pose, knees almost straight. Hard pins:
+// the step (pins on level 1, the drag on level 3) and ik::PinHold's corrections; soft pins: the
+// book's step alone (the drag exact, pins giving way). The counters give the pins' error after
+// the frame (mm) and the corrections taken.
+void squat_frame(benchmark::State& state, bool hard) {
+  const auto model = core::build_human_figure({});
+  const core::Model& m = *model;
+  const Eigen::VectorXd q0 = core::rest_configuration(m);
+  core::Data data(m);
+  core::forward_kinematics(m, data, q0);
+  ik::SolverSettings settings;
+  settings.hard_pins = hard;
+  ik::Problem problem;
+  for (const char* foot : {"l_foot", "r_foot"}) {
+    const core::Transform X = data.X_W[m.link_index(foot)];
+    problem.add(ik::LinkTask{.role = ik::kPin,
+                             .link = m.link_index(foot),
+                             .target_W = X.p,
+                             .target_R_W = Quaternion(X.R),
+                             .mode = ik::TaskMode::kPose},
+                ik::pin_priority(settings));
+  }
+  const Vector3 down(0, -0.5 / 60, 0);
+  ik::add_drag(
+      ik::LinkTask{
+          .role = ik::kDrag, .link = 1, .target_W = data.X_W[1].p + down, .velocity_W = down * 60},
+      settings, problem);
+  ik::Solver solver(m, settings);
+  ik::PinHold hold(m);
+  Eigen::VectorXd q = q0;
+  int corrections = 0;
+  for (auto _ : state) {
+    q = q0;
+    solver.step(problem, data, q);
+    if (hard) corrections = hold.hold(settings, problem, data, q).corrections;
+    benchmark::DoNotOptimize(q.data());
+  }
+  double pin_error = 0;
+  for (const auto& e : problem.entries()) {
+    if (const auto* t = std::get_if<ik::LinkTask>(&e.task); t && t->role == ik::kPin) {
+      pin_error = std::max(pin_error, ik::link_task_error(data, *t).position);
+    }
+  }
+  state.counters["pin_error_mm"] = 1e3 * pin_error;
+  state.counters["corrections"] = corrections;
+}
+
 BENCHMARK(BM_IkStep)->Name("BM_IkStep/human48_p5_j20");
+BENCHMARK_CAPTURE(squat_frame, hard_pins, true)->Name("BM_SquatFrame/human48_hard_pins");
+BENCHMARK_CAPTURE(squat_frame, soft_pins, false)->Name("BM_SquatFrame/human48_soft_pins");
 BENCHMARK(BM_IkStep_Dense)->Name("BM_IkStep_Dense/human48_p5_j20");
 BENCHMARK(BM_IkStep_KDL)->Name("BM_IkStep_KDL/human48_p5_j20");
 

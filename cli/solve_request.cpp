@@ -10,6 +10,7 @@
 #include "cli/solve_spec.hpp"
 #include "core/configuration.hpp"
 #include "core/kinematics.hpp"
+#include "ik/pin_hold.hpp"
 #include "ik/solver.hpp"
 #include "io/bundled_characters.hpp"
 #include "sim/placement.hpp"
@@ -252,9 +253,10 @@ json run_kinematic(const SolveSpec& r, Eigen::VectorXd& q) {
   for (const ik::LinkTask& pin : r.pins) problem.add(pin, ik::pin_priority(r.settings));
   for (const ik::JointReferenceTask& t : r.references) problem.add(t);
   std::vector<int> drag_ids;
-  for (const DragSpec& d : r.drags) drag_ids.push_back(problem.add(d.task));
+  for (const DragSpec& d : r.drags) drag_ids.push_back(ik::add_drag(d.task, r.settings, problem));
 
   ik::Solver solver(m, r.settings);
+  ik::PinHold pin_hold(m);  // hard pins: projected back after every step (docs/ik.md)
   json out_frames = json::array();
   for (int frame = 0; frame < r.frames; ++frame) {
     for (std::size_t k = 0; k < r.drags.size(); ++k) {
@@ -264,7 +266,11 @@ json run_kinematic(const SolveSpec& r, Eigen::VectorXd& q) {
     if (rep.status != ik::Report::Status::kOk) {
       throw RequestError("solver rejected the problem: " + rep.message);
     }
-    out_frames.push_back(frame_errors(r.drags, data, rep));
+    const int corrections = pin_hold.hold(r.settings, problem, data, q).corrections;
+    if (corrections > 0) solver.refresh_report(problem, data, q);
+    json errors = frame_errors(r.drags, data, rep);
+    errors["pin_corrections"] = corrections;
+    out_frames.push_back(std::move(errors));
   }
   return out_frames;
 }

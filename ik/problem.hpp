@@ -35,7 +35,10 @@ class Problem {
   int add(const LinkTask& t) { return add(Task(t), t.role == kDrag ? kTop : kLower); }
   int add(const JointReferenceTask& t) { return add(Task(t), kLower); }
   bool remove(int id);
-  void clear() { entries_.clear(); }
+  void clear() {
+    entries_.clear();
+    locked_joints.clear();
+  }
 
   /// The task with this id, or nullptr (also when it holds another kind).
   template <typename T>
@@ -53,6 +56,11 @@ class Problem {
 
   /// Whether the solver adds joint-limit and spherical-range rows (level 2).
   bool enforce_ranges = true;
+
+  /// Joints the solver holds still: their coordinates get no velocity on any level (as a joint
+  /// of ik_weight 0). Empty in the problems callers build; ik::PinHold locks joints a correction
+  /// would carry out of their ranges.
+  std::vector<int> locked_joints;
 
  private:
   std::vector<Entry> entries_;

@@ -17,6 +17,12 @@ bool positive_finite(double x) { return std::isfinite(x) && x > 0; }
 
 }  // namespace
 
+int add_drag(LinkTask drag, const SolverSettings& s, Problem& problem) {
+  if (!s.hard_pins) return problem.add(Task(drag), kTop);
+  drag.weight = kHardPinDragWeight;
+  return problem.add(Task(drag), kLower);
+}
+
 std::string validate(const SolverSettings& s) {
   if (!positive_finite(s.dt)) return "dt must be a finite number > 0";
   if (s.iterations < kMinIterations || s.iterations > kMaxIterations) {
@@ -83,6 +89,9 @@ std::string Solver::check_problem(const Problem& problem, const Eigen::VectorXd&
     }
     if (!err.empty()) return err;
   }
+  for (const int joint : problem.locked_joints) {
+    if (joint < 1 || joint >= m.njoints) return "locked joint index out of range";
+  }
   return {};
 }
 
@@ -104,6 +113,14 @@ const Report& Solver::step(const Problem& problem, core::Data& data, Eigen::Vect
   for (int j = 0; j < m.nv; ++j) {
     const double w = settings_.use_joint_weights ? m.ik_weight[m.joint_of_v[j]] : 1.0;
     ws_.joint_scale[j] = w > 0 ? 1.0 / std::sqrt(w) : 0.0;  // weight 0 locks the joint
+  }
+  if (!problem.locked_joints.empty()) {
+    for (int j = 0; j < m.nv; ++j) {
+      const auto& locked = problem.locked_joints;
+      if (std::find(locked.begin(), locked.end(), m.joint_of_v[j]) != locked.end()) {
+        ws_.joint_scale[j] = 0.0;
+      }
+    }
   }
 
   report_.max_joint_speed = 0;

@@ -76,10 +76,11 @@ struct SolverSettings {
   double limit_margin = kDefaultLimitMargin;
   double max_joint_step = kDefaultMaxJointStep;
   bool use_joint_weights = true;  // scale joints by the model's ik_weight
-  // where the callers that build problems from pins (the session, `pindrag solve`) put them: on
-  // level 1 beside the drag (hard: a pin holds and a drag it forbids stops short), or on level 3
-  // below it (soft, as in the book: the drag is exact and pins give way). The solver itself takes
-  // each task's level from the Problem.
+  // where the callers that build problems from pins (the session, `pindrag solve`) put them and
+  // the drag: hard, pins on level 1 and the drag on level 3 below them and the ranges (a pin
+  // holds, a drag it or a range forbids stops short; ik::PinHold projects the pins back after
+  // every step), or soft, as in the book: the drag on level 1 is exact and pins on level 3 give
+  // way. The solver itself takes each task's level from the Problem.
   bool hard_pins = false;
   // for the session, not the solver: kinematic posing keeps collision shapes above the floor
   // y = 0 and links resting on it where they stand (animator/floor_contacts.hpp)
@@ -88,6 +89,15 @@ struct SolverSettings {
 
 /// The level pins go on under these settings.
 inline Priority pin_priority(const SolverSettings& s) { return s.hard_pins ? kTop : kLower; }
+
+/// With hard pins a drag is best effort: it goes on level 3, below the pins (level 1) and the
+/// joint ranges (level 2), with this weight, so that the references and soft tasks beside it
+/// barely pull on it and the SR damping barely slows it (docs/ik.md, "Pin strength").
+constexpr double kHardPinDragWeight = 1000.0;
+
+/// Adds a drag on the level these settings put it: level 1 (soft pins) or level 3 with weight
+/// kHardPinDragWeight (hard pins). Returns its id.
+int add_drag(LinkTask drag, const SolverSettings& s, Problem& problem);
 
 /// Empty when the settings are usable, else a message naming the first bad field.
 std::string validate(const SolverSettings& s);
@@ -137,7 +147,13 @@ class Solver {
   /// (ik/solver_workspace.hpp).
   const Report& step(const Problem& problem, core::Data& data, Eigen::VectorXd& q);
 
+  const core::Model& model() const { return model_; }
   const SolverSettings& settings() const { return settings_; }
+  /// Re-evaluates the report's task errors and range violation at the pose in q and data (the
+  /// step's other figures stay): after the caller moved q, e.g. ik::PinHold's corrections.
+  void refresh_report(const Problem& problem, const core::Data& data, const Eigen::VectorXd& q) {
+    fill_report(problem, data, q);
+  }
   void set_settings(const SolverSettings& s) { settings_ = s; }
   const Report& report() const { return report_; }
   /// Joint velocity of the last iteration (nv).

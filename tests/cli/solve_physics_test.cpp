@@ -184,7 +184,7 @@ TEST(SolvePhysics, FieldsThatWouldChangeNothingAreRefused) {
 TEST(SolvePhysics, WithoutEffectsTheFramesKeepTheirFields) {
   const std::set<std::string> kinematic = {
       "drag_error",      "pin_position_error", "pin_orientation_error", "joint_speed",
-      "limit_violation", "top_rank",           "microseconds"};
+      "limit_violation", "top_rank",           "microseconds",          "pin_corrections"};
   for (const json& effects : {json(), json::array()}) {
     json r = standing_request();
     r["frames"] = 2;

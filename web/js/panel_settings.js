@@ -57,7 +57,8 @@ export function createSettingsPanel(state, connection) {
       },
     };
   });
-  // hard pins sit beside the drag and hold; soft pins sit below it and give way (docs/ik.md)
+  // hard pins rank above the drag and the ranges and are held every frame; soft pins sit below
+  // an exact drag and give way (docs/ik.md, "Pin strength")
   const hardPins = h('input#set-hard_pins', { type: 'checkbox' });
   hardPins.addEventListener('change', () => connection.send(msg.setSettings({ hard_pins: hardPins.checked })));
   const hardRow = h(
