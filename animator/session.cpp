@@ -119,7 +119,8 @@ void Session::drag_begin(int link,
                .p_LinkPoint = p_LinkPoint,
                .target_W = target_W,
                .rotation = std::nullopt,
-               .previous_target_W = target_W};
+               .previous_target_W = target_W,
+               .root_R_W = data_.X_W[1].R};
   floor_gesture_ = false;  // the floor's contacts are taken afresh for this gesture
   if (in_motion) start_motion_edit();
   settling_ = true;
@@ -314,6 +315,20 @@ void Session::rebuild_problem() {
   for (const Pin& p : doc_.pins) problem_.add(p.task(), ik::pin_priority(doc_.settings));
   if (floor_gesture_) {
     for (const Pin& p : floor_->pins()) problem_.add(p.task(), ik::pin_priority(doc_.settings));
+  }
+  if (drag_ && gesture_before_ && doc_.settings.reference_gain > 0) {
+    // the posture the gesture began in, as a preference (Yamane eq. 8.22): what the drag and
+    // the pins do not need keeps its shape. "Rest gain" in the page is its gain.
+    ik::add_joint_references(*model_, gesture_before_->q, problem_);
+    // and the root keeps its orientation, so a squat bends the knees instead of tipping the
+    // pelvis and the torso on it forward with the thighs: weighted as a pin, ten times a joint
+    // reference, since the hips' references would rather tip the pelvis than flex the hips
+    problem_.add(ik::LinkTask{.role = ik::kReference,
+                              .link = 1,
+                              .target_R_W = core::Quaternion(drag_->root_R_W),
+                              .mode = ik::TaskMode::kOrientation,
+                              .weight = 1.0},
+                 ik::kLower);
   }
   if (drag_) {
     ik::LinkTask d = drag_task();

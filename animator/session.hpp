@@ -286,6 +286,7 @@ class Session {
     core::Vector3 target_W = core::Vector3::Zero();
     std::optional<core::Quaternion> rotation;
     core::Vector3 previous_target_W = core::Vector3::Zero();  // as solved (the floor applied)
+    core::Matrix3 root_R_W = core::Matrix3::Identity();       // the root's orientation at the start
     // with the floor on, the dragged point is kept at or above this height: where it was when
     // the dragged link's shapes met the floor
     double floor_y = -std::numeric_limits<double>::infinity();

@@ -179,8 +179,10 @@ void Solver::fill_rows(const Problem& problem, const core::Data& data, const Eig
     const JointReferenceTask* reference = std::get_if<JointReferenceTask>(&e.task);
     if (link_task) {
       rows = task_rows(m, *link_task);
-      const double K = gain_or(link_task->gain,
-                               link_task->role == kDrag ? settings_.drag_gain : settings_.pin_gain);
+      const double role_gain = link_task->role == kDrag  ? settings_.drag_gain
+                               : link_task->role == kPin ? settings_.pin_gain
+                                                         : settings_.reference_gain;
+      const double K = gain_or(link_task->gain, role_gain);
       fill_link_task(m, data, *link_task, K, clamp, ws_.point_jacobian, J.middleRows(row, rows),
                      v.segment(row, rows));
       weight = link_task->weight;

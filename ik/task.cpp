@@ -20,7 +20,17 @@ const char* to_string(TaskMode m) {
   return "?";
 }
 
-const char* to_string(LinkRole r) { return r == LinkRole::kDrag ? "drag" : "pin"; }
+const char* to_string(LinkRole r) {
+  switch (r) {
+    case LinkRole::kDrag:
+      return "drag";
+    case LinkRole::kPin:
+      return "pin";
+    case LinkRole::kReference:
+      return "reference";
+  }
+  return "?";
+}
 
 namespace {
 int mode_rows(TaskMode m) { return m == TaskMode::kPose ? 6 : 3; }

@@ -21,13 +21,16 @@ const char* to_string(TaskMode m);
 /// "use the solver's default" for a gain
 constexpr double kDefaultGain = -1.0;
 
-/// What a link task is for: a drag (the pointer; level 1 by default, Yamane eq. 8.8) or a pin
-/// (hold a point; level 3 by default, eqs. 8.21 and 8.30). The role picks the default priority,
-/// the default gain and the name in the report; the rows are the same.
-enum class LinkRole { kDrag, kPin };
+/// What a link task is for: a drag (the pointer; level 1 by default, Yamane eq. 8.8), a pin
+/// (hold a point; level 3 by default, eqs. 8.21 and 8.30) or a reference (a preferred placement
+/// of a link, as a joint reference is a preferred angle: level 3, the reference gain). The role
+/// picks the default priority, the default gain and the name in the report; the rows are the
+/// same.
+enum class LinkRole { kDrag, kPin, kReference };
 constexpr LinkRole kDrag = LinkRole::kDrag;
 constexpr LinkRole kPin = LinkRole::kPin;
-const char* to_string(LinkRole r);  // "drag", "pin"
+constexpr LinkRole kReference = LinkRole::kReference;
+const char* to_string(LinkRole r);  // "drag", "pin", "reference"
 
 /// Move a point on a link to a world target: position, orientation or both. Feedback law
 /// ṙ = ṙ_ref + K (r_ref − r) (eq. 8.8), ω = ω_ref + K log(R_ref Rᵀ). A drag follows the pointer;

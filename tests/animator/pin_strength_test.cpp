@@ -21,6 +21,8 @@ struct Squat {
   double drift = 0;            // the largest distance of a pinned foot from its pin, any frame
   double pelvis_drop = 0;      // how far the pelvis went down
   double range_violation = 0;  // the largest, any frame (rad)
+  double knee_flexion = 0;     // the smaller of the two at the end (rad)
+  double chest_tilt = 0;       // the chest's orientation at the end against its start (rad)
 };
 
 Squat squat(Session& s, double depth) {
@@ -31,6 +33,8 @@ Squat squat(Session& s, double depth) {
     pinned[k] = position(s, feet[k]);
   }
   const Vector3 pelvis0 = position(s, "pelvis");
+  const int chest = s.model().link_index("chest");
+  const core::Matrix3 chest0 = s.kinematics().X_W[chest].R;
   s.drag_begin(1, pelvis0);
   Squat out;
   for (int frame = 1; frame <= 60; ++frame) {
@@ -42,6 +46,10 @@ Squat squat(Session& s, double depth) {
     out.range_violation = std::max(out.range_violation, ik::max_range_violation(s.model(), s.q()));
   }
   out.pelvis_drop = pelvis0.y() - position(s, "pelvis").y();
+  const core::Model& m = s.model();
+  out.knee_flexion =
+      std::min(s.q()[m.idx_q[m.link_index("l_shank")]], s.q()[m.idx_q[m.link_index("r_shank")]]);
+  out.chest_tilt = Eigen::AngleAxisd(chest0.transpose() * s.kinematics().X_W[chest].R).angle();
   s.drag_end();
   return out;
 }
@@ -56,6 +64,29 @@ TEST(PinStrength, ANewSessionsPinsHoldThroughASquat) {
   // flat feet stop the squat where the ankles reach their range: the drag is best effort
   EXPECT_LT(r.range_violation, 1e-3);
   EXPECT_GT(r.pelvis_drop, 0.15);
+}
+
+// Joint references toward the posture the gesture began in (Yamane eq. 8.22, "Rest gain" in the
+// page) and the root's orientation as a reference: the squat bends the knees and keeps the
+// torso about as it was; without them the pelvis tips forward with the thighs.
+TEST(PinStrength, RestGainKeepsTheTorsoUprightInASquat) {
+  Session with(human(), "human48");
+  const Squat r = squat(with, 0.12);  // a squat the ankles allow: the drag is met
+  Session without(human(), "human48");
+  ik::SolverSettings settings = without.solver_settings();
+  settings.reference_gain = 0;
+  without.set_solver_settings(settings);
+  const Squat r0 = squat(without, 0.12);
+  std::printf(
+      "rest gain %.1f: knees %.2f rad, chest tilted %.3f rad; rest gain 0: knees %.2f "
+      "rad, chest tilted %.3f rad\n",
+      with.solver_settings().reference_gain, r.knee_flexion, r.chest_tilt, r0.knee_flexion,
+      r0.chest_tilt);
+  EXPECT_NEAR(r.pelvis_drop, 0.12, 0.005);
+  EXPECT_GT(r.knee_flexion, 0.6) << "the knees bend";
+  EXPECT_LT(r.chest_tilt, 0.15) << "the torso stays about as it was";
+  EXPECT_LT(r.chest_tilt, 0.5 * r0.chest_tilt) << "the references make the difference";
+  EXPECT_LT(r.drift, 0.001);
 }
 
 TEST(PinStrength, SoftPinsGiveWayToTheDrag) {
