@@ -9,7 +9,7 @@ const FIELDS = [
   { path: ['iterations'], label: 'Iterations', min: 1, max: 10, step: 1, hint: 'solve steps per frame' },
   { path: ['gains', 'drag'], label: 'Drag gain', min: 1, max: 200, step: 1, unit: '1/s', hint: 'how fast the grabbed point follows the cursor' },
   { path: ['gains', 'pin'], label: 'Pin gain', min: 1, max: 200, step: 1, unit: '1/s', hint: 'how hard pins pull back' },
-  { path: ['gains', 'reference'], label: 'Rest gain', min: 0, max: 20, step: 0.1, unit: '1/s', hint: 'pull towards the reference pose' },
+  { path: ['gains', 'reference'], label: 'Rest gain', min: 0, max: 20, step: 0.1, unit: '1/s', hint: 'while dragging, pull towards the posture the drag began in' },
   { path: ['gains', 'limit'], label: 'Limit gain', min: 0, max: 100, step: 1, unit: '1/s', hint: 'push back into joint ranges' },
 ];
 
