@@ -219,6 +219,48 @@ test('a key lands on the frame the time display shows, unless snapping is off', 
   await context.close();
 });
 
+test('while a clip plays, a handle is grabbed from further away and a near miss does not orbit', async () => {
+  const { page, context, problems } = await openPage(browser, stub.url);
+  const hand = await page.evaluate(() => window.pindrag.project('r_hand'));
+  const pelvis = await page.evaluate(() => window.pindrag.project('pelvis'));
+  // away from the body, on the line from the pelvis through the hand
+  const len = Math.hypot(hand.x - pelvis.x, hand.y - pelvis.y);
+  const away = (px) => ({ x: hand.x + ((hand.x - pelvis.x) * px) / len, y: hand.y + ((hand.y - pelvis.y) * px) / len });
+  const pickedAt = async (px) => {
+    const start = stub.received.length;
+    const from = away(px);
+    await dragMouse(page, from, { x: from.x + 60, y: from.y - 40 });
+    await page.waitForTimeout(150);
+    return stub.received.slice(start).find((m) => m.type === 'drag_begin')?.link ?? null;
+  };
+  let start = stub.received.length;
+  if (await page.evaluate(() => window.pindrag.session?.playback?.playing === true)) {
+    await page.keyboard.press('Space'); // the stub's session may still play from an earlier test
+    await waitForMessage((m) => m.type === 'pause', start, 'pause');
+    await page.waitForFunction(() => window.pindrag.session?.playback?.playing === false);
+    start = stub.received.length;
+  }
+  await page.keyboard.press('Space');
+  await waitForMessage((m) => m.type === 'play', start, 'play');
+  await page.waitForFunction(() => window.pindrag.session?.playback?.playing === true);
+  const camera = await page.evaluate(() => window.pindrag.camera());
+  const handNow = await page.evaluate(() => window.pindrag.project('r_hand'));
+  const pelvisNow = await page.evaluate(() => window.pindrag.project('pelvis'));
+  assert.deepEqual([handNow.x, handNow.y, pelvisNow.x, pelvisNow.y], [hand.x, hand.y, pelvis.x, pelvis.y], 'the view moved');
+  assert.equal(await pickedAt(20), 'r_hand', 'while playing, a press 20 px from the hand did not grab it');
+  assert.equal(await pickedAt(60), null, 'a press 60 px from every handle grabbed a link');
+  assert.deepEqual(await page.evaluate(() => window.pindrag.camera()), camera, 'a missed grab while playing orbited the camera');
+  // paused, the same press 20 px away is empty space (it orbits)
+  start = stub.received.length;
+  await page.keyboard.press('Space');
+  await waitForMessage((m) => m.type === 'pause', start, 'pause');
+  await page.waitForFunction(() => window.pindrag.session?.playback?.playing === false);
+  assert.equal(await pickedAt(20), null, 'at rest, a press 20 px from the handle grabbed it');
+  assert.notDeepEqual(await page.evaluate(() => window.pindrag.camera()), camera, 'at rest, a press on empty space did not orbit');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('orbiting and panning never take the camera below the floor', async () => {
   const { page, context, problems } = await openPage(browser, stub.url);
   const box = await page.locator('canvas').first().boundingBox();

@@ -9,6 +9,10 @@ import * as THREE from 'three';
 import { msg } from './protocol.js';
 
 const HANDLE_PICK_PX = 12;
+// while a clip plays the handles move under the pointer: they are picked from further away, and a
+// press near the figure that grabs nothing is swallowed instead of starting an orbit
+const MOVING_HANDLE_PICK_PX = 28;
+const MOVING_MISS_GUARD_PX = 90;
 const DRAG_THRESHOLD_PX = 3;
 
 export function createDragControls(state, viewport, skeleton, connection, actions, pins) {
@@ -51,11 +55,25 @@ export function createDragControls(state, viewport, skeleton, connection, action
   let awaitingAck = false;
   let emptyPress = null;
 
+  const playing = () => state.session?.playback?.playing === true;
+
+  /** Screen distance (px) from the event to the nearest visible handle. */
+  function nearestHandlePx(event) {
+    let nearest = Infinity;
+    for (const p of skeleton.handlePositions()) {
+      const s = viewport.toClient(p);
+      if (s.visible) nearest = Math.min(nearest, Math.hypot(s.x - event.clientX, s.y - event.clientY));
+    }
+    return nearest;
+  }
+
   function pick(event) {
-    // 1. handles, in screen space: the nearest within HANDLE_PICK_PX, ties broken towards the camera
+    // 1. handles, in screen space: the nearest within the pick radius, ties broken towards the
+    // camera. The handles are where the figure is drawn, so a moving one is picked where it is seen.
+    const radius = playing() ? MOVING_HANDLE_PICK_PX : HANDLE_PICK_PX;
     if (state.view.handles) {
       let best = -1;
-      let bestD = HANDLE_PICK_PX;
+      let bestD = radius;
       let bestDepth = Infinity;
       const positions = skeleton.handlePositions();
       for (let i = 0; i < positions.length; i++) {
@@ -63,7 +81,7 @@ export function createDragControls(state, viewport, skeleton, connection, action
         if (!s.visible) continue;
         const d = Math.hypot(s.x - event.clientX, s.y - event.clientY);
         const depth = positions[i].distanceTo(viewport.camera.position);
-        if (d < bestD - 2 || (d < HANDLE_PICK_PX && Math.abs(d - bestD) <= 2 && depth < bestDepth)) {
+        if (d < bestD - 2 || (d < radius && Math.abs(d - bestD) <= 2 && depth < bestDepth)) {
           best = i;
           bestD = d;
           bestDepth = depth;
@@ -135,6 +153,12 @@ export function createDragControls(state, viewport, skeleton, connection, action
     const otherHandle = hit && hit.handle && state.character.links[hit.link].name !== pins.gizmoLink;
     if (pins.wantsPointer() && !otherHandle) return;
     if (!hit) {
+      if (event.button === 0 && playing() && nearestHandlePx(event) < MOVING_MISS_GUARD_PX) {
+        // a grab at a moving figure that missed: nothing happens (no orbit, no deselection)
+        event.stopImmediatePropagation();
+        event.preventDefault();
+        return;
+      }
       // empty space: orbit as usual; a click without movement clears the selection
       emptyPress = event.button === 0 ? { x: event.clientX, y: event.clientY } : null;
       return;

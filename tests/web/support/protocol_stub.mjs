@@ -147,6 +147,14 @@ export async function startProtocolStub({ character = path.join(SOURCE_DIR, 'cha
           session.pins = session.pins.filter((p) => p.link !== m.link);
           sendState();
           break;
+        case 'play':
+          session.playback.playing = true;
+          sendState();
+          break;
+        case 'pause':
+          session.playback.playing = false;
+          sendState();
+          break;
         case 'set_effects':
           session.scene = m.scene;
           sendState();
