@@ -51,7 +51,6 @@ bool PinHold::correct_once(const Problem& problem,
   // Baerlocher and Boulic). Range rows on a level below the pins would fight them where the
   // pins alone fix that joint (both knees straight close a loop through the root).
   const core::Model& m = solver_.model();
-  start_q_ = q;
   build_correction(problem, gain);
   range_flags_before_.assign(m.njoints, 0);
   range_rows_.clear();
@@ -61,7 +60,6 @@ bool PinHold::correct_once(const Problem& problem,
   for (int round = 0; round <= kMaxLockRounds; ++round) {
     const Report& r = solver_.step(correction_, data, q);
     if (r.status != Report::Status::kOk) return false;
-    report_.step_limited = report_.step_limited || r.step_limited;
     if (!problem.enforce_ranges) return true;
     range_flags_.assign(m.njoints, 0);
     range_rows_.clear();
@@ -98,13 +96,13 @@ const PinHoldReport& PinHold::hold(const SolverSettings& settings,
   const double gain = settings.iterations / settings.dt;
   const core::Model& m = solver_.model();
   while (report_.corrections < max_corrections && report_.error_after > tolerance) {
-    kept_q_ = q;
+    start_q_ = q;
     const bool done = correct_once(problem, data, q, gain);
     const double error = done ? hard_pin_error(problem, data) : report_.error_after;
     if (!done || error >= report_.error_after) {
       // no better: the pose stays as it was (pins that cannot all be met, or only by leaving
       // a range)
-      q = kept_q_;
+      q = start_q_;
       core::forward_kinematics(m, data, q);
       break;
     }

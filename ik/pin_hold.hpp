@@ -24,10 +24,9 @@ constexpr double kDefaultHardPinTolerance = 1e-4;  // m (and rad for orientation
 constexpr int kDefaultMaxPinCorrections = 3;
 
 struct PinHoldReport {
-  int corrections = 0;        // correcting steps taken
-  double error_before = 0;    // largest hard-pin error after the step (m or rad)
-  double error_after = 0;     // ... and after the corrections
-  bool step_limited = false;  // a correction was scaled down by max_joint_step
+  int corrections = 0;      // correcting steps taken
+  double error_before = 0;  // largest hard-pin error after the step (m or rad)
+  double error_after = 0;   // ... and after the corrections
 };
 
 class PinHold {
@@ -57,14 +56,14 @@ class PinHold {
 
  private:
   void build_correction(const Problem& problem, double gain);
-  /// One correcting step from q; false when it could not be taken inside the ranges.
+  /// One correcting step from start_q_ (= q); false when it could not be taken inside the ranges.
   bool correct_once(const Problem& problem, core::Data& data, Eigen::VectorXd& q, double gain);
   static constexpr int kMaxLockRounds = 4;
 
   Solver solver_;
   Problem correction_;
   PinHoldReport report_;
-  Eigen::VectorXd kept_q_, start_q_;
+  Eigen::VectorXd start_q_;  // the pose before the current correction
   std::vector<RangeRow> range_rows_;
   std::vector<char> range_flags_, range_flags_before_;
 };
