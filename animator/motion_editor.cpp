@@ -1,6 +1,8 @@
 #include "animator/motion_editor.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include "core/configuration.hpp"
 #include "core/jacobian.hpp"
@@ -34,10 +36,15 @@ ik::SolverSettings motion_edit_settings(double frame_time) {
 }
 
 MotionEditor::MotionEditor(const core::Model& model, const ik::SolverSettings& settings)
-    : model_(model), solver_(model, settings), data_(model), ref_data_(model) {}
+    : model_(model),
+      solver_(model, settings),
+      data_(model),
+      ref_data_(model),
+      frame_time_(settings.dt) {}
 
 void MotionEditor::begin(const core::Clip& base, const LayerStack& layers, int frame) {
   recorded_.clear();
+  last_solved_ = -1;
   layered_frame(model_, base, layers, frame, q_);
 }
 
@@ -51,10 +58,10 @@ const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base,
   // with the clip, and the damping resists changes of the edit rather than the clip's motion.
   layered_frame(model_, base, layers, frame, q_ref_);
   core::forward_kinematics(model_, ref_data_, q_ref_);
-  if (recorded_.empty()) {
+  if (last_solved_ < 0) {
     q_ = q_ref_;
   } else {
-    core::integrate(model_, q_ref_, recorded_.rbegin()->second, 1.0, q_);
+    core::integrate(model_, q_ref_, recorded_.at(last_solved_).displacement, 1.0, q_);
   }
 
   problem_.clear();
@@ -89,7 +96,8 @@ const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base,
   // the edited frame, as a displacement over the layered clip
   Eigen::VectorXd delta(model_.nv);
   core::difference(model_, q_ref_, q_, delta);
-  recorded_[frame] = std::move(delta);
+  recorded_[frame] = Recorded{std::move(delta), last_solved_};
+  last_solved_ = frame;
   return q_;
 }
 
@@ -99,22 +107,38 @@ std::shared_ptr<const EditLayer> MotionEditor::finish(const std::string& name, d
   layer->name = name;
   layer->falloff = falloff;
   layer->first_frame = recorded_.begin()->first;
-  const int last = recorded_.rbegin()->first;
-  layer->displacement.resize(last - layer->first_frame + 1);
-  // frames skipped between recorded ones get the linear blend of their neighbours
-  auto next = recorded_.begin();
-  for (int f = layer->first_frame; f <= last; ++f) {
-    while (next != recorded_.end() && next->first < f) ++next;
-    if (next != recorded_.end() && next->first == f) {
-      layer->displacement[f - layer->first_frame] = next->second;
-      continue;
+  layer->displacement.resize(recorded_.rbegin()->first - layer->first_frame + 1);
+  // the cosine ease of EditLayer::blend: 1 at an edited frame, 0 beyond the falloff
+  const auto ease = [&](int frames) {
+    const double d = frames * frame_time_;
+    return falloff <= 0 || d >= falloff ? 0.0
+                                        : 0.5 * (1.0 + std::cos(std::numbers::pi * d / falloff));
+  };
+  for (auto it = recorded_.begin(); it != recorded_.end(); ++it) {
+    const int a = it->first;
+    const Eigen::VectorXd& da = it->second.displacement;
+    layer->displacement[a - layer->first_frame] = da;
+    const auto next = std::next(it);
+    if (next == recorded_.end()) break;
+    const int b = next->first;
+    const Eigen::VectorXd& db = next->second.displacement;
+    const bool stepped_over = next->second.previous == a;  // one pass went from a straight to b
+    for (int f = a + 1; f < b; ++f) {
+      double wa, wb;
+      if (stepped_over) {
+        wb = double(f - a) / double(b - a);
+        wa = 1.0 - wb;
+      } else {
+        wa = ease(f - a);
+        wb = ease(b - f);
+        const double sum = wa + wb;
+        if (sum > 1.0) wa /= sum, wb /= sum;
+      }
+      layer->displacement[f - layer->first_frame] = wa * da + wb * db;
     }
-    const auto after = next;
-    const auto before = std::prev(next);
-    const double s = double(f - before->first) / double(after->first - before->first);
-    layer->displacement[f - layer->first_frame] = (1 - s) * before->second + s * after->second;
   }
   recorded_.clear();
+  last_solved_ = -1;
   return layer;
 }
 

@@ -30,15 +30,20 @@ class MotionEditor {
 
   /// Solves frame f: pins follow the layered clip (their link points' trajectories), joints
   /// follow its angles weakly, and the drag (if any) pulls on top. Records the frame's
-  /// displacement. Returns the edited pose.
+  /// displacement. Returns the edited pose. The solve starts from the frame solved before it, so
+  /// an edit whose clock wrapped to the loop's start goes on as the same edit (one gesture, one
+  /// layer); a frame solved again replaces its record.
   const Eigen::VectorXd& edit(const core::Clip& base,
                               const LayerStack& layers,
                               int frame,
                               const std::vector<Pin>& pins,
                               const std::optional<ik::LinkTask>& drag);
 
-  /// The recorded frames as an edit layer (gaps between recorded frames interpolated), or null
-  /// when nothing was recorded.
+  /// The recorded frames as an edit layer, or null when nothing was recorded. Frames the edit
+  /// stepped over are interpolated linearly between the frames before and after; frames between
+  /// two passes of a wrapped edit that neither reached ease out from both sides over `falloff`
+  /// seconds (the cosine of EditLayer::blend), so the gesture's frames are exact and the frames
+  /// it never touched are not carried along.
   std::shared_ptr<const EditLayer> finish(const std::string& name, double falloff);
 
   const Eigen::VectorXd& pose() const { return q_; }
@@ -49,7 +54,13 @@ class MotionEditor {
   ik::Solver solver_;
   core::Data data_, ref_data_;
   Eigen::VectorXd q_, q_ref_;
-  std::map<int, Eigen::VectorXd> recorded_;  // frame → displacement
+  struct Recorded {
+    Eigen::VectorXd displacement;
+    int previous = -1;  // the frame solved just before this one in the gesture, -1 for the first
+  };
+  std::map<int, Recorded> recorded_;  // frame → its displacement
+  int last_solved_ = -1;              // the frame solved last (warm start of the next)
+  double frame_time_;
   ik::Problem problem_;
 };
 

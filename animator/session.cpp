@@ -107,11 +107,12 @@ void Session::drag_begin(int link,
   check_link(link);
   if (!finite(target_W)) throw SessionError("target_W", "must be 3 finite numbers");
   if (!finite(p_LinkPoint)) throw SessionError("p_LinkPoint", "must be 3 finite numbers");
-  const bool in_motion = playback_.playing && doc_.clip && doc_.clip->size() > 1 && !physics_;
-  if (in_motion && static_cast<int>(doc_.layers.size()) >= limits_.max_layers) {
+  const bool over_clip = doc_.clip && doc_.clip->size() > 1 && !physics_;
+  const bool in_motion = over_clip && playback_.playing;
+  if (over_clip && static_cast<int>(doc_.layers.size()) >= limits_.max_layers) {
     throw BudgetError("the session has " + std::to_string(doc_.layers.size()) +
                       " edit layers, the most it may hold (set by " + kMaxLayersSetting +
-                      "; bake or remove layers to edit in motion again)");
+                      "; bake or remove layers to edit the clip again)");
   }
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
@@ -122,7 +123,24 @@ void Session::drag_begin(int link,
                .previous_target_W = target_W,
                .root_R_W = data_.X_W[1].R};
   floor_gesture_ = false;  // the floor's contacts are taken afresh for this gesture
-  if (in_motion) start_motion_edit();
+  if (in_motion) {
+    start_motion_edit();
+  } else if (over_clip) {
+    // a paused clip: the drag edits the frame shown (the nearest frame, shown exactly), and
+    // pins are moving pins that hold where their links are at that frame, not where they were
+    // when pinned at another frame
+    const int frame =
+        std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
+                   doc_.clip->size() - 1);
+    drag_->edit_frame = frame;
+    playback_.time = frame * doc_.clip->frame_time;
+    layered_frame(*model_, *doc_.clip, doc_.layers, frame, doc_.q);
+    refresh_kinematics();
+    for (Pin& p : doc_.pins) {
+      p.target_W = data_.X_W[p.link] * p.p_LinkPoint;
+      p.target_R_W = core::Quaternion(data_.X_W[p.link].R);
+    }
+  }
   settling_ = true;
 }
 
@@ -140,12 +158,16 @@ void Session::drag_move(const core::Vector3& target_W,
 void Session::drag_end() {
   if (!drag_) return;
   if (motion_editor_) finish_motion_edit();
+  const int edit_frame = drag_->edit_frame;
   drag_.reset();
+  if (edit_frame >= 0 && doc_.clip) keep_frame_edit(edit_frame);
   if (gesture_before_) {
     commit(*gesture_before_, "drag");
     gesture_before_.reset();
   }
-  settling_ = true;  // pins pulled away by the drag recover through their feedback
+  // pins pulled away by the drag recover through their feedback; a kept frame edit shows the
+  // layered clip, which has nothing to recover
+  settling_ = edit_frame < 0;
 }
 
 std::optional<int> Session::dragged_link() const {
@@ -303,6 +325,20 @@ void Session::finish_motion_edit() {
   show_animation_at(playback_.time);
 }
 
+void Session::keep_frame_edit(int frame) {
+  Eigen::VectorXd below;
+  layered_frame(*model_, *doc_.clip, doc_.layers, frame, below);
+  auto layer = std::make_shared<EditLayer>();
+  layer->displacement.emplace_back(model_->nv);
+  core::difference(*model_, below, doc_.q, layer->displacement[0]);
+  if (layer->displacement[0].cwiseAbs().maxCoeff() == 0.0) return;  // nothing moved
+  layer->name = "edit " + std::to_string(++edit_counter_);
+  layer->first_frame = frame;
+  layer->falloff = doc_.edit_falloff;
+  doc_.layers.push_back(std::move(layer));
+  show_animation_at(playback_.time);
+}
+
 // --- time
 // ------------------------------------------------------------------------------------------
 
@@ -413,18 +449,26 @@ bool Session::solve_step() {
   return true;
 }
 
-bool Session::edit_in_motion(double t, TickResult& result) {
+void Session::edit_in_motion(double t, TickResult& result) {
   // solve every clip frame the clock passed since the last tick
   const int frame = std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
                                doc_.clip->size() - 1);
-  if (frame < motion_edit_frame_) {
-    // the clock wrapped: keep what was edited as a layer, start a new edit here (unless the
-    // layers are at their limit: then the drag rests until released)
-    finish_motion_edit();
-    if (static_cast<int>(doc_.layers.size()) >= limits_.max_layers) return false;
-    start_motion_edit();
-  }
   const ik::LinkTask d = drag_task();
+  if (frame < motion_edit_frame_) {
+    // the clock wrapped to the loop's start: the frames up to the loop's end are solved, and the
+    // same edit goes on from the start, so one gesture makes one layer however many times the
+    // loop comes round
+    const double length = duration();
+    const double ft = doc_.clip->frame_time;
+    const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
+    const double end =
+        playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
+    const int end_frame = std::min(static_cast<int>(std::lround(end / ft)), doc_.clip->size() - 1);
+    for (int f = motion_edit_frame_ + 1; f <= end_frame; ++f) {
+      motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
+    }
+    motion_edit_frame_ = std::clamp(static_cast<int>(std::lround(start / ft)), 0, frame) - 1;
+  }
   for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
     motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
   }
@@ -432,7 +476,6 @@ bool Session::edit_in_motion(double t, TickResult& result) {
   doc_.q = motion_editor_->pose();
   refresh_kinematics();
   result.report = &motion_editor_->report();
-  return true;
 }
 
 Session::TickResult Session::tick(double dt) {
@@ -455,7 +498,11 @@ Session::TickResult Session::tick(double dt) {
     }
     playback_.time = t;
     // editing in motion, or the animation as it is
-    if (!(motion_editor_ && drag_ && edit_in_motion(t, result))) show_animation_at(t);
+    if (motion_editor_ && drag_) {
+      edit_in_motion(t, result);
+    } else {
+      show_animation_at(t);
+    }
     result.pose_changed = true;
   } else if (drag_ || settling_) {
     if (solve_step()) {

@@ -264,8 +264,10 @@ class Session {
   void show_animation_at(double t);
   void start_motion_edit();
   void finish_motion_edit();
-  /// One tick of editing in motion at clip time t; false when no edit runs (layers at the limit).
-  bool edit_in_motion(double t, TickResult& result);
+  /// The pose a drag left at a paused clip's frame, kept as a one-frame layer with the falloff.
+  void keep_frame_edit(int frame);
+  /// One tick of editing in motion at clip time t: every frame the clock passed is solved.
+  void edit_in_motion(double t, TickResult& result);
   void check_key_time(double time) const;
   void check_clip_budget(std::int64_t frames, double frame_time, const std::string& field) const;
   std::int64_t recording_frame_budget() const;
@@ -290,6 +292,8 @@ class Session {
     // with the floor on, the dragged point is kept at or above this height: where it was when
     // the dragged link's shapes met the floor
     double floor_y = -std::numeric_limits<double>::infinity();
+    // a drag over a paused clip edits the frame shown; its end keeps the edit as a layer
+    int edit_frame = -1;
   };
   std::optional<Drag> drag_;
   std::optional<Document> gesture_before_;

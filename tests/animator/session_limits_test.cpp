@@ -92,7 +92,10 @@ TEST(SessionLimits, EditingInMotionBeyondTheLayerCountIsRefused) {
                  {"1 edit layers", "pindrag serve --max-layers", "bake or remove"});
   EXPECT_FALSE(s.dragging());
   s.pause();
-  s.drag_begin(hand, position(s, "r_hand"));  // posing, not editing in motion: allowed
+  // a drag over the paused clip edits its frame as a layer too: refused alike
+  expect_refused(s, [&] { s.drag_begin(hand, position(s, "r_hand")); }, {"1 edit layers"});
+  s.remove_layer(0);
+  s.drag_begin(hand, position(s, "r_hand"));
   s.drag_end();
 }
 

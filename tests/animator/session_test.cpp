@@ -232,6 +232,101 @@ TEST(Session, EditingInMotionKeepsPinnedFeetAndLeavesOtherFramesUntouched) {
   EXPECT_EQ(s.animation_clip().frames[40], edited.frames[40]);
 }
 
+// A drag over a paused clip edits the frame shown. Pins are moving pins there too: a drag at frame
+// 8 keeps the pinned links where the clip has them at frame 8, not where they were when pinned at
+// frame 0; the edit is kept as a layer on that frame.
+TEST(Session, PinsOverAPausedClipHoldWhereTheClipHasThemAtTheFrameShown) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  const core::Clip base = swinging_clip(m, 60);
+  s.set_clip(base);
+  s.seek(0.0);
+  s.pin(m.link_index("l_foot"), ik::TaskMode::kPose);
+  s.pin(m.link_index("r_hand"), ik::TaskMode::kPosition);
+  s.seek(8.0 / 30);
+  const Vector3 foot = position(s, "l_foot");
+  const Vector3 hand = position(s, "r_hand");
+  ASSERT_GT((hand - s.pins()[1].target_W).norm(), 0.01) << "the clip must move the pinned hand";
+  const Vector3 start = position(s, "l_hand");
+  s.drag_begin(m.link_index("l_hand"), start);
+  double drift = 0;
+  for (int k = 1; k <= 20; ++k) {
+    s.drag_move(start + Vector3(0, 0.005 * k, 0.003 * k));
+    s.tick(1.0 / 60);
+    drift = std::max(
+        {drift, (position(s, "l_foot") - foot).norm(), (position(s, "r_hand") - hand).norm()});
+  }
+  const Vector3 dragged = position(s, "l_hand");
+  s.drag_end();
+  EXPECT_LT(drift, 1e-3);
+  EXPECT_GT((dragged - start).norm(), 0.05);
+  // the edit is kept: a layer on frame 8 that seeking away and back shows again, one undo entry
+  ASSERT_EQ(s.layers().size(), 1u);
+  EXPECT_EQ(s.layers()[0]->first_frame, 8);
+  EXPECT_EQ(s.layers()[0]->last_frame(), 8);
+  s.seek(40.0 / 30);
+  s.seek(8.0 / 30);
+  EXPECT_LT((position(s, "l_hand") - dragged).norm(), 1e-9);
+  const core::Clip edited = s.animation_clip();
+  EXPECT_EQ(edited.frames[40], base.frames[40]);  // beyond the falloff: untouched
+  s.undo();
+  EXPECT_TRUE(s.layers().empty());
+}
+
+// Plays a 60-frame looping clip (30 fps, falloff 3 frames) from frame 40 and holds the right hand
+// 9 cm off for `ticks` frames; returns the clip.
+core::Clip hold_a_drag_over_the_loop(Session& s, int ticks) {
+  const core::Clip base = swinging_clip(s.model(), 60);
+  s.set_clip(base);
+  s.set_edit_falloff(0.1);
+  s.set_loop(true);
+  s.seek(40.0 / 30);
+  s.play();
+  const Vector3 start = position(s, "r_hand");
+  s.drag_begin(s.model().link_index("r_hand"), start);
+  s.drag_move(start + Vector3(0, 0.08, 0.05));
+  run(s, ticks, 1.0 / 30);
+  s.drag_end();
+  s.pause();
+  return base;
+}
+
+// One gesture makes one layer: a drag held while a looping clip comes round twice is one edit
+// over both ends of the loop; the frames between its two passes that it never reached keep the
+// clip beyond the falloff.
+TEST(Session, AGestureAcrossTheLoopWrapMakesOneLayer) {
+  Session s(human(), "human48");
+  hold_a_drag_over_the_loop(s, 100);  // frames 41..59, then 0..59 again, then 0..20
+  ASSERT_EQ(s.layers().size(), 1u);
+  const EditLayer& layer = *s.layers()[0];
+  EXPECT_EQ(layer.first_frame, 0);
+  EXPECT_EQ(layer.last_frame(), 59);
+  for (int f : {5, 30, 50}) EXPECT_GT(layer.displacement[f].norm(), 0.01) << f;
+}
+
+// A gesture released before the loop came round again leaves a gap of frames it never reached:
+// they ease out from both passes, and the middle of the gap keeps the clip.
+TEST(Session, FramesAGestureNeverReachedKeepTheClip) {
+  Session s(human(), "human48");
+  const core::Model& m = s.model();
+  const core::Clip base = hold_a_drag_over_the_loop(s, 35);  // frames 41..59, then 0..16
+  ASSERT_EQ(s.layers().size(), 1u);
+  const EditLayer& layer = *s.layers()[0];
+  ASSERT_EQ(layer.first_frame, 0);
+  ASSERT_EQ(layer.last_frame(), 59);
+  EXPECT_GT(layer.displacement[10].norm(), 0.01);
+  EXPECT_GT(layer.displacement[50].norm(), 0.01);
+  // the gap 17..40: three frames of ease on each side, the clip itself in between
+  for (int f = 21; f <= 36; ++f) EXPECT_EQ(layer.displacement[f].norm(), 0.0) << f;
+  EXPECT_GT(layer.displacement[17].norm(), 0.0);
+  EXPECT_LT(layer.displacement[17].norm(), layer.displacement[16].norm());
+  EXPECT_LT(layer.displacement[40].norm(), layer.displacement[41].norm());
+  const core::Clip edited = s.animation_clip();
+  for (int f = 21; f <= 36; ++f) {
+    EXPECT_LT(core::difference(m, base.frames[f], edited.frames[f]).norm(), 1e-12) << f;
+  }
+}
+
 // The real-clip check: a CMU walk (31 joints, 120 fps), both feet moving pins while the
 // right hand is dragged 12 cm away from where the clip has it, for half a second of playback.
 TEST(Session, EditingInMotionOnARealCmuClipKeepsTheFeetWithinAMillimetre) {

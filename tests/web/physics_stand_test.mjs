@@ -6,36 +6,23 @@
 // web-test-output/physics_stand/.
 // Usage: node tests/web/physics_stand_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
-import { outputDir, pindragBinary, skip } from './support/env.mjs';
-import { launchBrowser, openPage, settle } from './support/browser.mjs';
-import { startPindragServer, hasServeCommand } from './support/pindrag_server.mjs';
+import { openPage, settle } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+import { linkP, serverSnapshot } from './support/session_page.mjs';
 
-const binary = pindragBinary();
-if (!(await hasServeCommand(binary))) skip(`${binary} has no 'serve' command`);
-const out = outputDir('physics_stand');
+const fixture = await serverAndBrowser('physics_stand');
+const out = fixture.out;
 const DRAG_DOWN_M = 0.12;
 const COP_TOLERANCE_M = 0.01;
 
 let browser;
 let server;
-before(async () => {
-  server = await startPindragServer(binary, out);
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+before(async () => ({ server, browser } = await fixture.start()));
 
-async function serverLink(page, name) {
-  const { id, token } = await page.evaluate(() => ({ id: window.pindrag.sessionId, token: window.pindrag.token }));
-  const link = (await server.snapshot(id, token)).links.find((l) => l.name === name);
-  assert.ok(link, `the server has no link '${name}'`);
-  return link.p;
-}
+const serverLink = async (page, name) => linkP(await serverSnapshot(server, page), name);
 
 const physicsNow = (page) => page.evaluate(() => window.pindrag.lastPose?.physics ?? null);
 

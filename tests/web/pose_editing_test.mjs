@@ -4,55 +4,27 @@
 // undo and redo of a drag. Screenshots go to web-test-output/ in the working directory.
 // Usage: node tests/web/pose_editing_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { outputDir, pindragBinary, skip, NODE_MODULES } from './support/env.mjs';
-import { launchBrowser, openPage, dragMouse, canvasStats, settle } from './support/browser.mjs';
-import { startPindragServer, hasServeCommand } from './support/pindrag_server.mjs';
+import { NODE_MODULES } from './support/env.mjs';
+import { openPage, dragMouse, canvasStats, settle } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+import { linkP, dist, handle, serverSnapshot as snapshotOf, waitForServer as waitFor } from './support/session_page.mjs';
 
-const binary = pindragBinary();
-if (!(await hasServeCommand(binary))) skip(`${binary} has no 'serve' command`);
-const out = outputDir('pose_editing');
+const fixture = await serverAndBrowser('pose_editing');
+const out = fixture.out;
 const FOOT_TOLERANCE_M = 1e-3;
 const SETTLE_MS = 600; // hold the pointer still this long before releasing, so the solver catches up
 
 let browser;
 let server;
-before(async () => {
-  server = await startPindragServer(binary, out);
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+before(async () => ({ server, browser } = await fixture.start()));
 
-const linkP = (snapshot, name) => {
-  const l = snapshot.links.find((x) => x.name === name);
-  assert.ok(l, `the snapshot has no link '${name}'`);
-  return l.p;
-};
-const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-
-async function serverSnapshot(page) {
-  const { id, token } = await page.evaluate(() => ({ id: window.pindrag.sessionId, token: window.pindrag.token }));
-  return server.snapshot(id, token);
-}
-
-/** Polls the server's snapshot until `ok(snapshot)` holds; returns it, or fails with `what`. */
-async function waitForServer(page, ok, what, timeoutMs = 8000) {
-  const deadline = Date.now() + timeoutMs;
-  let s;
-  while (Date.now() < deadline) {
-    s = await serverSnapshot(page);
-    if (ok(s)) return s;
-    await new Promise((r) => setTimeout(r, 100));
-  }
-  assert.fail(`${what} (waited ${timeoutMs} ms)`);
-}
+const serverSnapshot = (page) => snapshotOf(server, page);
+const waitForServer = (page, ok, what, timeoutMs) => waitFor(server, page, ok, what, timeoutMs);
 
 /** Drags with the pointer held still at the end for a moment. */
 async function dragAndHold(page, from, to) {
@@ -62,12 +34,6 @@ async function dragAndHold(page, from, to) {
   await page.waitForTimeout(SETTLE_MS);
   await page.mouse.up();
   await page.waitForTimeout(200);
-}
-
-async function handle(page, name) {
-  const p = await page.evaluate((n) => window.pindrag.project(n), name);
-  assert.ok(p && p.visible, `the handle of ${name} is not on screen`);
-  return p;
 }
 
 test('the canvas shows the figure', async () => {

@@ -5,52 +5,29 @@
 // web-test-output/posing_feel/.
 // Usage: node tests/web/posing_feel_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
-import { outputDir, pindragBinary, skip } from './support/env.mjs';
-import { launchBrowser, openPage, settle } from './support/browser.mjs';
-import { startPindragServer, hasServeCommand } from './support/pindrag_server.mjs';
+import { openPage, settle } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+import { linkP, dist, handle, serverSnapshot as snapshotOf } from './support/session_page.mjs';
 
-const binary = pindragBinary();
-if (!(await hasServeCommand(binary))) skip(`${binary} has no 'serve' command`);
-const out = outputDir('posing_feel');
+const fixture = await serverAndBrowser('posing_feel');
+const out = fixture.out;
 const PIN_TOLERANCE_M = 1e-3;
 const SAMPLE_MS = 100;
 
 let browser;
 let server;
-before(async () => {
-  server = await startPindragServer(binary, out);
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+before(async () => ({ server, browser } = await fixture.start()));
 
-const linkP = (snapshot, name) => {
-  const l = snapshot.links.find((x) => x.name === name);
-  assert.ok(l, `the snapshot has no link '${name}'`);
-  return l.p;
-};
-const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
 const angle = (a, b) => {
   const c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (Math.hypot(...a) * Math.hypot(...b));
   return Math.acos(Math.max(-1, Math.min(1, c)));
 };
 
-async function serverSnapshot(page) {
-  const { id, token } = await page.evaluate(() => ({ id: window.pindrag.sessionId, token: window.pindrag.token }));
-  return server.snapshot(id, token);
-}
-
-async function handle(page, name) {
-  const p = await page.evaluate((n) => window.pindrag.project(n), name);
-  assert.ok(p && p.visible, `the handle of ${name} is not on screen`);
-  return p;
-}
+const serverSnapshot = (page) => snapshotOf(server, page);
 
 /**
  * Drags `link` by `offset` (metres, world) with the mouse in 10 moves 50 ms apart, holds it for

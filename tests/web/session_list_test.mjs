@@ -4,28 +4,19 @@
 // more; deleting a session open in another tab is refused and says why.
 // Usage: node tests/web/session_list_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
-import { test, before, after } from 'node:test';
+import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { outputDir, pindragBinary, skip } from './support/env.mjs';
-import { launchBrowser, settle } from './support/browser.mjs';
-import { startPindragServer, hasServeCommand } from './support/pindrag_server.mjs';
+import { settle } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
 
-const binary = pindragBinary();
-if (!(await hasServeCommand(binary))) skip(`${binary} has no 'serve' command`);
-const out = outputDir('session_list');
+const fixture = await serverAndBrowser('session_list');
+const out = fixture.out;
 
 let browser;
 let server;
-before(async () => {
-  server = await startPindragServer(binary, out);
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+before(async () => ({ server, browser } = await fixture.start()));
 
 async function openTab(context, url) {
   const page = await context.newPage();

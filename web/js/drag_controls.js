@@ -2,7 +2,8 @@
 // few pixels) or on the body (raycast) grabs that link at that point; the target then moves on the
 // camera-facing plane through the grabbed point (constant depth). Orbit is off for the whole
 // gesture, and the press never reaches the orbit controls. A press that does not move is a click
-// (select). Right-click toggles a pin. The ghost (sphere and spring) shows the target until the
+// (select). Right-click toggles a pin. A gesture on a playing clip may slow or pause it until the
+// release (the view option "while dragging"). The ghost (sphere and spring) shows the target until the
 // server's pose acknowledges it.
 
 import * as THREE from 'three';
@@ -13,6 +14,8 @@ const HANDLE_PICK_PX = 12;
 // press near the figure that grabs nothing is swallowed instead of starting an orbit
 const MOVING_HANDLE_PICK_PX = 28;
 const MOVING_MISS_GUARD_PX = 90;
+// "slow while dragging": the clip plays at this fraction of its speed while a link is held
+const SLOW_WHILE_DRAGGING = 0.25;
 const DRAG_THRESHOLD_PX = 3;
 
 export function createDragControls(state, viewport, skeleton, connection, actions, pins) {
@@ -128,12 +131,31 @@ export function createDragControls(state, viewport, skeleton, connection, action
     signals.renderRequested.dispatch();
   }
 
+  /** Slows or pauses a playing clip for the gesture (view option "while dragging"); returns the
+   *  messages that restore it after the drag ends. */
+  function adjustPlayback() {
+    const pb = state.session?.playback;
+    if (!state.session?.clip || !pb?.playing) return [];
+    if (state.view.whileDragging === 'pause') {
+      connection.send(msg.pause()); // the drag then edits the frame shown, kept as a layer
+      return [msg.play()];
+    }
+    if (state.view.whileDragging === 'slow') {
+      connection.send(msg.setSpeed(pb.speed * SLOW_WHILE_DRAGGING));
+      return [msg.setSpeed(pb.speed)];
+    }
+    return [];
+  }
+
   function beginServerDrag() {
     const name = state.character.links[press.link].name;
+    const restore = adjustPlayback();
     if (!connection.dragBegin(name, press.grabWorld.toArray(), press.pointLink.toArray())) {
+      for (const m of restore) connection.send(m);
       press = null;
       return;
     }
+    press.restorePlayback = restore;
     press.started = true;
     ghostLink = press.link;
     ghostPoint = press.pointLink.toArray();
@@ -212,11 +234,12 @@ export function createDragControls(state, viewport, skeleton, connection, action
   function finish(cancel) {
     if (!press) return;
     const started = press.started;
+    const restore = press.restorePlayback || [];
     if (canvas.hasPointerCapture(press.pointerId)) canvas.releasePointerCapture(press.pointerId);
     press = null;
     viewport.controls.enabled = true;
     if (started) {
-      connection.dragEnd(cancel ? [msg.undo()] : []);
+      connection.dragEnd(cancel ? [msg.undo(), ...restore] : restore);
       state.dragging = null;
       signals.dragChanged.dispatch({ active: false, link: ghostLink, target: null, cancelled: cancel });
       if (cancel || !awaitingAck) {

@@ -16,6 +16,7 @@ import { createTimelinePanel } from './panel_timeline.js';
 import { createSelectionPanel } from './panel_selection.js';
 import { createSettingsPanel } from './panel_settings.js';
 import { createEffectsPanel } from './panel_effects.js';
+import { createLayersPanel } from './panel_layers.js';
 import { createPhysicsView } from './physics_view.js';
 import { createStatusPanel } from './panel_status.js';
 import { createToasts } from './panel_toasts.js';
@@ -23,6 +24,7 @@ import { createHelpOverlay } from './panel_help.js';
 import { createSessionsPanel } from './panel_sessions.js';
 import { rememberSession } from './known_sessions.js';
 import { createViewOptions } from './panel_view_options.js';
+import { createCameraFollow } from './camera_follow.js';
 import { bindKeyboard } from './keyboard.js';
 
 const SESSION_STORAGE_KEY = 'pindrag.session';
@@ -93,6 +95,7 @@ async function main() {
   createLimitsView(state, viewport, skeleton);
   const pins = createPinsView(state, viewport, skeleton, connection);
   const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
+  createCameraFollow(state, viewport, skeleton);
   createPhysicsView(state, viewport, document.getElementById('stage'));
 
   document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions));
@@ -101,6 +104,7 @@ async function main() {
   sidebar.append(
     createSelectionPanel(state, actions, skeleton),
     createSettingsPanel(state, connection),
+    createLayersPanel(state, connection),
     createEffectsPanel(state, connection),
     createStatusPanel(state, connection),
     createSessionsPanel(state, api, switchSession),
@@ -154,6 +158,8 @@ async function main() {
       const s = viewport.toClient({ x: p[0], y: p[1], z: p[2] });
       return { x: s.x, y: s.y, visible: s.visible };
     },
+    /** World position of a link's pin marker as drawn now (null: not pinned). */
+    pinMarker: (name) => pins.markerPosition(name),
     /** World position of a link's pivot as drawn now. */
     linkPosition(name) {
       const i = state.linkIndex.get(name);

@@ -1,5 +1,6 @@
 // A small bar over the 3D view: show or hide the joint handles, the selected joint's range and the
-// floor grid, snap keys to frames or not, and put the camera back home.
+// floor grid, snap keys to frames or not, let the camera follow the figure, choose what a playing
+// clip does while a link is held, and put the camera back home.
 
 import { h } from './panel_util.js';
 
@@ -15,8 +16,21 @@ export function createViewOptions(state, viewport) {
     toggles[key] = input;
     return h('label.toggle', { title }, input, label);
   };
+  const whileDragging = h(
+    'select#while-dragging',
+    { title: 'What a playing clip does while you hold a link' },
+    h('option', { value: 'play' }, 'play on'),
+    h('option', { value: 'slow' }, 'slow (¼×)'),
+    h('option', { value: 'pause' }, 'pause'),
+  );
+  whileDragging.value = state.view.whileDragging;
+  whileDragging.addEventListener('change', () => {
+    state.view.whileDragging = whileDragging.value;
+    signals.viewOptionsChanged.dispatch({ ...state.view });
+  });
   signals.viewOptionsChanged.add((v) => {
     for (const [key, input] of Object.entries(toggles)) input.checked = !!v[key];
+    whileDragging.value = v.whileDragging;
   });
   return h(
     'div.view-options#view-options',
@@ -25,6 +39,8 @@ export function createViewOptions(state, viewport) {
     toggle('limits', 'ranges', 'Show the selected joint’s range (L)'),
     toggle('grid', 'grid', 'Show the floor grid'),
     toggle('snapKeys', 'snap keys', 'Keys land on frames at the clip’s rate'),
+    toggle('follow', 'follow', 'The camera travels with the figure'),
+    h('label.toggle', { title: 'What a playing clip does while you hold a link' }, 'while dragging ', whileDragging),
     h('button.small', { type: 'button', title: 'Reset the view (Shift+F)', onclick: () => viewport.home() }, 'Home view'),
   );
 }

@@ -1,5 +1,5 @@
 // Pins in the 3D view: a marker at every pin target (with a line to the pinned point when the pin
-// drifts), and a TransformControls gizmo on the selected link's pin that moves its target
+// drifts; over a clip, where pins move with the motion, at the pinned point of the frame shown), and a TransformControls gizmo on the selected link's pin that moves its target
 // (move_pin, latest-wins once per animation frame). Orbit is off while the gizmo is dragged.
 
 import * as THREE from 'three';
@@ -63,7 +63,8 @@ export function createPinsView(state, viewport, skeleton, connection) {
 
   function syncGizmo() {
     const pin = pinOf(state, state.selected);
-    if (!pin || !pin.target) {
+    // a moving pin (over a clip) has no fixed target to move
+    if (!pin || !pin.target || state.session?.clip) {
       gizmoPin = null;
       gizmo.detach();
       helper.visible = false;
@@ -85,6 +86,7 @@ export function createPinsView(state, viewport, skeleton, connection) {
 
   function syncMarkers() {
     const pins = state.session?.pins || [];
+    const moving = !!state.session?.clip; // moving pins (editing in motion, Yamane eq. 8.30)
     const names = new Set(pins.map((p) => p.link));
     for (const [name, m] of markers) {
       if (!names.has(name)) {
@@ -99,9 +101,15 @@ export function createPinsView(state, viewport, skeleton, connection) {
         markers.set(p.link, m);
         group.add(m.group, m.line);
       }
-      if (p.target) m.group.position.fromArray(p.target);
       const i = state.linkIndex.get(p.link);
       const from = i !== undefined ? skeleton.linkPointWorld(i, p.point || [0, 0, 0]) : null;
+      if (moving && from) {
+        // over a clip a pin follows its link's motion: drawn where the link is at this frame
+        m.group.position.copy(from);
+        m.line.visible = false;
+        continue;
+      }
+      if (p.target) m.group.position.fromArray(p.target);
       if (from && p.target) {
         const pos = m.line.geometry.attributes.position;
         pos.setXYZ(0, from.x, from.y, from.z);
@@ -128,6 +136,11 @@ export function createPinsView(state, viewport, skeleton, connection) {
   });
 
   return {
+    /** World position [x, y, z] of a link's pin marker as drawn now, or null. */
+    markerPosition(link) {
+      const m = markers.get(link);
+      return m ? m.group.position.toArray() : null;
+    },
     /** True when the pointer is over a gizmo handle (the press belongs to the gizmo). */
     wantsPointer: () => !!(gizmo.object && helper.visible && gizmo.axis !== null),
     /** The link whose pin the gizmo moves, or null. */

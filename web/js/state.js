@@ -44,7 +44,7 @@ export const SIGNAL_NAMES = [
   'timeCursorChanged', // seconds: where the playhead is (and where a new key goes)
   'pinModeChanged', // 'position' | 'orientation' | 'pose'
   'gizmoModeChanged', // 'translate' | 'rotate'
-  'viewOptionsChanged', // {limits, handles, grid, snapKeys}
+  'viewOptionsChanged', // {limits, handles, grid, snapKeys, follow, whileDragging}
   'focusRequested', // a link index to centre the camera on
   'helpToggled', // bool (show) or undefined (toggle)
   'notify', // {text, kind: 'info'|'error'} — a short message for the user
@@ -75,7 +75,8 @@ export function createState() {
     dragging: null, // {link, target}
     pinMode: 'pose',
     gizmoMode: 'translate',
-    view: { limits: true, handles: true, grid: true, snapKeys: true },
+    // whileDragging: what a playing clip does while a link is held: 'play' | 'slow' | 'pause'
+    view: { limits: true, handles: true, grid: true, snapKeys: true, follow: false, whileDragging: 'play' },
   };
   signals.hoverChanged.add((i) => (state.hover = i));
   signals.selectionChanged.add((i) => (state.selected = i));

@@ -1,0 +1,119 @@
+// Editing in motion in the page with `pindrag serve` in headless Chromium: a clip recorded with
+// the mouse plays at 1× in a loop; a pin on a link the clip moves is drawn where that link is at
+// every frame shown; the other hand grabbed while the clip plays, and held while the loop comes
+// round, makes one edit layer, listed in the layers panel, which mutes and deletes it; the grab
+// leaves the camera where it was.
+// Screenshots go to web-test-output/motion_editing/.
+// Usage: node tests/web/motion_editing_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
+
+import { test, before } from 'node:test';
+import assert from 'node:assert/strict';
+import path from 'node:path';
+import { openPage } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+import { dist, handle, serverSnapshot, waitForServer } from './support/session_page.mjs';
+
+const fixture = await serverAndBrowser('motion_editing');
+const out = fixture.out;
+
+let browser;
+let server;
+before(async () => ({ server, browser } = await fixture.start()));
+
+const session = (page) => page.evaluate(() => window.pindrag.session);
+
+/** Records about a second of the right hand moved up and down with the mouse; it becomes the clip. */
+async function recordClip(page) {
+  const from = await handle(page, 'r_hand');
+  // (the record button blinks while recording: clicked without waiting for it to stand still)
+  const toggleRecord = () => page.$eval('#tl-record', (b) => b.click());
+  await toggleRecord();
+  await page.waitForFunction(() => window.pindrag.session?.recording === true, null, { timeout: 5000 });
+  await page.mouse.move(from.x, from.y);
+  await page.mouse.down();
+  const start = Date.now();
+  for (let k = 1; Date.now() - start < 1000; k++) {
+    const dy = -60 * Math.sin((Math.PI * k) / 6);
+    await page.mouse.move(from.x + k, from.y + dy);
+    await page.waitForTimeout(30);
+  }
+  await page.mouse.up();
+  await page.waitForTimeout(150);
+  await toggleRecord();
+  await page.waitForFunction(() => window.pindrag.session?.clip?.frames > 10, null, { timeout: 5000 });
+  return session(page);
+}
+
+test('a grab held while a looping clip plays makes one layer, listed and managed in the panel', async () => {
+  const t0 = Date.now();
+  const phase = (what) => console.log(`${what}: ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+  const { page, context, problems } = await openPage(browser, server.url);
+  phase('page open');
+  const recorded = await recordClip(page);
+  console.log(`recorded clip: ${recorded.clip.frames} frames, ${recorded.clip.duration.toFixed(2)} s`);
+  phase('recorded');
+  if (!recorded.playback.loop) await page.click('#tl-loop');
+  await page.waitForFunction(() => window.pindrag.session?.playback?.loop === true);
+
+  // a pin on the right hand, which the clip moves; then play at 1x
+  await page.click('#tl-first');
+  const h = await handle(page, 'r_hand');
+  await page.mouse.click(h.x, h.y, { button: 'right' });
+  await page.waitForFunction(() => (window.pindrag.session?.pins || []).some((p) => p.link === 'r_hand'), null, { timeout: 5000 });
+  await page.click('#tl-play');
+  await page.waitForFunction(() => window.pindrag.session?.playback?.playing === true);
+
+  phase('playing');
+  // the pin marker is drawn on the hand at every frame shown
+  let markerOff = 0;
+  const markers = [];
+  for (let k = 0; k < 12; k++) {
+    const { marker, hand } = await page.evaluate(() => ({ marker: window.pindrag.pinMarker('r_hand'), hand: window.pindrag.linkPosition('r_hand') }));
+    markerOff = Math.max(markerOff, dist(marker, hand));
+    markers.push(marker);
+    await page.waitForTimeout(70);
+  }
+  const markerTravel = Math.max(...markers.map((m) => dist(m, markers[0])));
+  console.log(`pin marker: at most ${(markerOff * 1000).toFixed(3)} mm from the hand, travelled ${(markerTravel * 100).toFixed(1)} cm`);
+  assert.ok(markerOff < 1e-3, `the pin marker was ${(markerOff * 1000).toFixed(1)} mm from its link`);
+  assert.ok(markerTravel > 0.02, `the pin marker stayed put (${(markerTravel * 100).toFixed(1)} cm) while the clip moved the hand`);
+
+  phase('markers checked');
+  const camera = await page.evaluate(() => window.pindrag.camera());
+
+  // the left hand grabbed while the clip plays, held for longer than the loop
+  const grab = await handle(page, 'l_hand');
+  await page.mouse.move(grab.x, grab.y);
+  await page.mouse.down();
+  const holdMs = Math.max(1500, recorded.clip.duration * 1000 * 1.6);
+  const steps = Math.round(holdMs / 50);
+  for (let k = 1; k <= steps; k++) {
+    await page.mouse.move(grab.x - Math.min(k, 20) * 2, grab.y - Math.min(k, 20) * 3);
+    await page.waitForTimeout(50);
+  }
+  await page.screenshot({ path: path.join(out, 'grabbed.png') });
+  await page.mouse.up();
+  assert.deepEqual(await page.evaluate(() => window.pindrag.camera()), camera, 'the grab orbited the camera');
+
+  phase('released');
+  const withLayer = await waitForServer(server, page, (s) => s.layers.length > 0, 'no layer after the grab');
+  await page.waitForTimeout(300);
+  const layers = (await serverSnapshot(server, page)).layers;
+  console.log(`layers after one grab: ${JSON.stringify(layers)}`);
+  assert.equal(layers.length, 1, `one grab across the loop made ${layers.length} layers`);
+  assert.equal(withLayer.layers[0].first_frame, 0, 'the layer should span the loop it came round');
+  await page.waitForFunction(() => document.querySelectorAll('#layer-list li').length === 1, null, { timeout: 5000 });
+  const text = await page.textContent('#layer-list li');
+  assert.match(text, /edit 1/);
+
+  // mute, then delete, from the panel
+  await page.click('#layer-list li .layer-mute');
+  await waitForServer(server, page, (s) => s.layers[0]?.muted === true, 'muting from the panel did not reach the server');
+  await page.click('#layer-list li .layer-remove');
+  await waitForServer(server, page, (s) => s.layers.length === 0, 'deleting from the panel did not reach the server');
+  await page.waitForFunction(() => document.querySelectorAll('#layer-list li').length === 0, null, { timeout: 5000 });
+  phase('layer muted and deleted');
+  await page.screenshot({ path: path.join(out, 'layers.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
