@@ -138,11 +138,12 @@ void write_clip_file(const std::string& path,
   if (options.bvh_order || options.bvh_scale) {
     throw std::invalid_argument(path + ": --order and --scale apply to BVH files only");
   }
+  const bool skinned = source.skin && !source.skin->empty();
   io::GltfExportOptions o;
-  o.stick_figure = options.stick_figure && (!source.skin || source.skin->empty());
+  o.stick_figure = !skinned && options.stick_figure;
+  o.shape_mesh = !skinned && !options.stick_figure && options.shape_mesh;
   if (options.progress) options.progress(0.0);
-  io::save_gltf_file(path, *source.model, &clip,
-                     source.skin && !source.skin->empty() ? source.skin.get() : nullptr, o);
+  io::save_gltf_file(path, *source.model, &clip, skinned ? source.skin.get() : nullptr, o);
   if (options.progress) options.progress(1.0);
 }
 

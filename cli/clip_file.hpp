@@ -49,7 +49,10 @@ ClipFile read_clip_file(const std::string& path, const ClipReadOptions& options 
 struct ClipWriteOptions {
   std::optional<std::string> bvh_order;  // e.g. "ZXY"
   std::optional<double> bvh_scale;       // metres per BVH file unit
-  bool stick_figure = true;              // glTF without a skinned mesh: add the stick figure
+  // glTF without a skinned mesh: the links' shapes as a mesh (the stick figure for a model
+  // without shapes), or with stick_figure the stick figure instead; both false: skeleton only
+  bool shape_mesh = true;
+  bool stick_figure = false;
   std::function<void(double)> progress;
 };
 

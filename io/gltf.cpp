@@ -16,6 +16,7 @@
 #include "io/atomic_file.hpp"
 #include "io/gltf_buffer.hpp"
 #include "io/gltf_mesh.hpp"
+#include "io/gltf_shape_mesh.hpp"
 
 namespace io {
 
@@ -106,7 +107,8 @@ void check_input(const Model& model,
     if (!e.empty()) throw std::invalid_argument("glTF export: clip: " + e);
   }
   if (skin != nullptr) check_skin(model, *skin);
-  if (options.stick_figure && !(options.stick_radius > 0 && std::isfinite(options.stick_radius))) {
+  const bool sticks = options.stick_figure || options.shape_mesh;
+  if (sticks && !(options.stick_radius > 0 && std::isfinite(options.stick_radius))) {
     throw std::invalid_argument("glTF export: stick_radius must be a finite number > 0");
   }
 }
@@ -219,19 +221,20 @@ void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
 
 // the stick figure: a box from each link to each child, a cube on each link origin
 void add_stick_figure(Parts& d, double r) {
-  const Model& model = d.model;
   MeshArrays m;
-  for (int i = 1; i < model.njoints; ++i) {
-    const Transform X_bind = d.inverse_bind[i].inverse();
-    append_box(X_bind, Vector3::Zero(), Vector3::Zero(), 1.5 * r, i - 1, m);
-    for (int c = i + 1; c < model.subtree_end[i]; ++c) {
-      if (model.parent[c] != i) continue;
-      append_box(X_bind, Vector3::Zero(), model.X_PJ[c].p, r, i - 1, m);
-    }
+  for (int i = 1; i < d.model.njoints; ++i) {
+    append_link_sticks(d.model, i, d.inverse_bind[i].inverse(), r, m);
   }
-  std::vector<float> wgt(4 * (m.pos.size() / 3), 0.0f);
-  for (size_t v = 0; v < wgt.size(); v += 4) wgt[v] = 1.0f;
-  add_mesh(d, "stick_figure", m, wgt, {0.55, 0.65, 0.8, 1.0}, 0.6);
+  add_mesh(d, "stick_figure", m, rigid_weights(m), {0.55, 0.65, 0.8, 1.0}, 0.6);
+}
+
+// the shape mesh: every link's primitive shapes at the bind pose (stick boxes for a link
+// without any), one light grey material
+void add_shape_mesh(Parts& d, double r) {
+  std::vector<Transform> X_bind(d.model.njoints);
+  for (int i = 1; i < d.model.njoints; ++i) X_bind[i] = d.inverse_bind[i].inverse();
+  const MeshArrays m = shape_mesh(d.model, X_bind, r);
+  add_mesh(d, "shapes", m, rigid_weights(m), {0.78, 0.78, 0.8, 1.0}, 0.7);
 }
 
 // key times k · frame_time as floats, which must strictly increase
@@ -333,7 +336,12 @@ tinygltf::Model build(const Model& model,
   }
   add_skin(d);
   if (skin != nullptr) add_skinned_mesh(d, *skin);
-  if (options.stick_figure) add_stick_figure(d, options.stick_radius);
+  // the shape mesh, or the stick figure in its place when the model has no primitive shape
+  const bool shapes = options.shape_mesh && has_primitive_shapes(model);
+  if (shapes) add_shape_mesh(d, options.stick_radius);
+  if (options.stick_figure || (options.shape_mesh && !shapes)) {
+    add_stick_figure(d, options.stick_radius);
+  }
   // mesh nodes: roots with an identity transform, skinned by skin 0
   for (size_t m = 0; m < d.doc.meshes.size(); ++m) {
     tinygltf::Node n;

@@ -13,6 +13,10 @@
 //    times k·frame_time starting at 0, hemisphere-continuous unit quaternions;
 //  - with a skinned mesh: positions, normals, JOINTS_0 (unsigned short), WEIGHTS_0 (float,
 //    summing to 1), a material with its base colour, on a root mesh node with an identity TRS;
+//  - optionally a shape mesh: every link's primitive shapes (capsules, spheres, boxes,
+//    cylinders; its visual shapes, else its collision shapes) at the bind pose, each vertex
+//    rigidly skinned to its link, with normals and a light grey material; a link without a
+//    shape gets its stick-figure boxes, and a model without any shape the whole stick figure;
 //  - optionally a stick-figure mesh: a thin box per bone, rigidly skinned to its link, so any
 //    viewer shows a bare skeleton.
 #pragma once
@@ -30,6 +34,7 @@ namespace io {
 
 struct GltfExportOptions {
   std::string name;                   // scene and animation name; empty: the model's name
+  bool shape_mesh = false;            // add the links' shapes as a mesh skinned rigidly to them
   bool stick_figure = false;          // add a box-per-bone mesh skinned rigidly to the links
   double stick_radius = 0.01;         // half width of a stick-figure box (m)
   std::string generator = "pindrag";  // asset.generator

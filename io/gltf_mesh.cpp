@@ -168,4 +168,18 @@ void append_box(
   }
 }
 
+void append_link_sticks(
+    const Model& model, int i, const Transform& X_bind, double r, MeshArrays& out) {
+  append_box(X_bind, Vector3::Zero(), Vector3::Zero(), 1.5 * r, i - 1, out);
+  for (int c = i + 1; c < model.subtree_end[i]; ++c) {
+    if (model.parent[c] == i) append_box(X_bind, Vector3::Zero(), model.X_PJ[c].p, r, i - 1, out);
+  }
+}
+
+std::vector<float> rigid_weights(const MeshArrays& m) {
+  std::vector<float> wgt(4 * (m.pos.size() / 3), 0.0f);
+  for (std::size_t v = 0; v < wgt.size(); v += 4) wgt[v] = 1.0f;
+  return wgt;
+}
+
 }  // namespace io::gltf_detail

@@ -47,4 +47,12 @@ struct MeshArrays {
 void append_box(
     const Transform& X, const Vector3& a, const Vector3& b, double r, int joint, MeshArrays& out);
 
+/// The stick figure of link i (a cube of half size 1.5 r on its origin, a box of half width r to
+/// each child's origin) placed by X_bind, its link's bind pose, and skinned to skin joint i - 1.
+void append_link_sticks(
+    const Model& model, int i, const Transform& X_bind, double r, MeshArrays& out);
+
+/// WEIGHTS_0 of a rigidly skinned mesh: (1, 0, 0, 0) for every vertex.
+std::vector<float> rigid_weights(const MeshArrays& m);
+
 }  // namespace io::gltf_detail

@@ -368,13 +368,17 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         bvh.layout = a.bvh_source.get();
         set_uncompressed(res, io::write_bvh(actor->model(), a.clip, bvh),
                          "text/plain; charset=utf-8");
-      } else if (format == "gltf") {
-        res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, {.name = a.name}),
-                        "model/gltf+json");
       } else {
-        const std::vector<std::uint8_t> glb =
-            io::write_glb(actor->model(), &a.clip, a.skin, {.name = a.name});
-        res.set_content(std::string(glb.begin(), glb.end()), "model/gltf-binary");
+        // without a skinned mesh, the character's shapes make the mesh every viewer draws
+        const io::GltfExportOptions gltf{.name = a.name,
+                                         .shape_mesh = a.skin == nullptr || a.skin->empty()};
+        if (format == "gltf") {
+          res.set_content(io::write_gltf(actor->model(), &a.clip, a.skin, gltf), "model/gltf+json");
+        } else {
+          const std::vector<std::uint8_t> glb =
+              io::write_glb(actor->model(), &a.clip, a.skin, gltf);
+          res.set_content(std::string(glb.begin(), glb.end()), "model/gltf-binary");
+        }
       }
     } catch (const std::invalid_argument& e) {
       return send_error(res, 422, std::string("export: ") + e.what());

@@ -308,7 +308,7 @@ void Renderer::create_objects() {
   glBindVertexArray(figure_vao_);
   glBindBuffer(GL_ARRAY_BUFFER, figure_vertices_);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, figure_indices_);
-  const GLsizei stride = TriangleMesh::kFloatsPerVertex * sizeof(float);
+  const GLsizei stride = io::TriangleMesh::kFloatsPerVertex * sizeof(float);
   for (GLuint attribute = 0; attribute < 3; ++attribute) {
     glEnableVertexAttribArray(attribute);
     glVertexAttribPointer(

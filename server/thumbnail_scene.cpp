@@ -49,33 +49,20 @@ struct SideTint {
   }
 };
 
-bool has_primitive(const std::vector<core::Geometry>& shapes) {
-  return std::any_of(shapes.begin(), shapes.end(), [](const core::Geometry& g) {
-    return g.shape != core::Geometry::Shape::kMesh;
-  });
-}
-
-// the shapes drawn for a link: its visual primitives, else its collision primitives
-const std::vector<core::Geometry>* drawn_shapes(const core::Model& model, int i) {
-  if (has_primitive(model.visual[i])) return &model.visual[i];
-  if (has_primitive(model.collision[i])) return &model.collision[i];
-  return nullptr;
-}
-
 void append_shapes(const core::Model& model,
                    const core::Data& posed,
                    const core::Data& neutral,
                    const Vector3& origin_W,
                    const SideTint& tint,
                    double bone_radius,
-                   TriangleMesh& mesh) {
+                   io::TriangleMesh& mesh) {
   const core::Transform X_FW = core::Transform::from_translation(-origin_W);
   for (int i = 1; i < model.njoints; ++i) {
-    if (const auto* shapes = drawn_shapes(model, i)) {
+    if (const auto* shapes = io::primitive_shapes(model, i)) {
       for (const core::Geometry& g : *shapes) {
         const Vector3 centre_neutral_W = neutral.X_W[i] * g.X_LinkShape.p;
-        append_geometry(mesh, X_FW * posed.X_W[i] * g.X_LinkShape, g,
-                        tint.colour(centre_neutral_W));
+        io::append_geometry(mesh, X_FW * posed.X_W[i] * g.X_LinkShape, g,
+                            tint.colour(centre_neutral_W));
       }
       continue;
     }
@@ -85,8 +72,9 @@ void append_shapes(const core::Model& model,
     const Vector3 mid_neutral_W =
         parent > 0 ? Vector3(0.5 * (neutral.X_W[i].p + neutral.X_W[parent].p)) : neutral.X_W[i].p;
     const Eigen::Vector3f& colour = tint.colour(mid_neutral_W);
-    append_sphere(mesh, p_F, 1.6 * bone_radius, colour);
-    if (parent > 0) append_segment(mesh, posed.X_W[parent].p - origin_W, p_F, bone_radius, colour);
+    io::append_sphere(mesh, p_F, 1.6 * bone_radius, colour);
+    if (parent > 0)
+      io::append_segment(mesh, posed.X_W[parent].p - origin_W, p_F, bone_radius, colour);
   }
 }
 
@@ -117,7 +105,7 @@ void append_skin(const core::SkinnedMesh& skin,
                  const std::vector<core::Transform>& X_skin,
                  const Vector3& origin_W,
                  const std::vector<Eigen::Vector3f>& bone_tint,
-                 TriangleMesh& mesh) {
+                 io::TriangleMesh& mesh) {
   const std::size_t n = p_W.size();
   std::vector<Vector3> normals(n, Vector3::Zero());
   if (!skin.normals.empty()) {
@@ -137,7 +125,7 @@ void append_skin(const core::SkinnedMesh& skin,
   }
   // the skin's own colour, half mixed with the side tint of its bones (blended by weight)
   const Eigen::Vector3f base = skin.base_color.head<3>().cwiseMax(0.0f).cwiseMin(1.0f);
-  mesh.vertices.reserve(n * TriangleMesh::kFloatsPerVertex);
+  mesh.vertices.reserve(n * io::TriangleMesh::kFloatsPerVertex);
   for (std::size_t v = 0; v < n; ++v) {
     const double length = normals[v].norm();
     const Vector3 unit = length > 0 ? Vector3(normals[v] / length) : Vector3::UnitY();

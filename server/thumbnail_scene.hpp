@@ -8,7 +8,7 @@
 
 #include "core/model.hpp"
 #include "core/skin.hpp"
-#include "server/shape_mesh.hpp"
+#include "io/shape_mesh.hpp"
 #include "server/thumbnail.hpp"
 
 namespace server {
@@ -17,7 +17,7 @@ namespace server {
 /// of the figure's bounds is the origin (keeps float coordinates small wherever the figure is).
 struct ThumbnailScene {
   int size = 256;
-  TriangleMesh figure;
+  io::TriangleMesh figure;
   Eigen::Matrix4f view_projection = Eigen::Matrix4f::Identity();  // F → clip space
   Eigen::Vector3f eye_F = Eigen::Vector3f::Zero();
   std::array<float, 3> background{};  // sRGB in [0, 1]

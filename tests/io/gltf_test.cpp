@@ -557,7 +557,8 @@ struct Written {
 };
 
 // everything we write, as .gltf and .glb: skeleton only, with a clip, with the stick figure,
-// with a skinned mesh, and the branching tree with fixed and prismatic joints
+// with the shape mesh, with a skinned mesh, and the branching tree with fixed and prismatic
+// joints
 std::vector<Written> write_variants(const gltf_test::TempDir& dir) {
   const auto m = human();
   const auto tree = fixtures::branching_tree();
@@ -567,6 +568,8 @@ std::vector<Written> write_variants(const gltf_test::TempDir& dir) {
   const core::SkinnedMesh skin = synthetic_skin(*m);
   io::GltfExportOptions stick;
   stick.stick_figure = true;
+  io::GltfExportOptions shapes;
+  shapes.shape_mesh = true;
   std::vector<Written> out;
   for (const char* ext : {".gltf", ".glb"}) {
     auto add = [&](const std::string& label, const core::Model& model, const core::Clip* c,
@@ -578,6 +581,7 @@ std::vector<Written> write_variants(const gltf_test::TempDir& dir) {
     add("human48_skeleton", *m, nullptr, nullptr, {});
     add("human48_clip", *m, &clip, nullptr, {});
     add("human48_stick", *m, &clip, nullptr, stick);
+    add("human48_shapes", *m, &clip, nullptr, shapes);
     add("human48_skinned", *m, &clip, &skin, stick);
     add("tree_clip", *tree, &tree_clip, nullptr, {});
   }
@@ -611,14 +615,27 @@ TEST(GltfExport, ThreeJsGltfLoaderSeesOurForwardKinematics) {
   const auto m = human();
   const core::Clip clip = synthetic_clip(*m, 400);
   gltf_test::TempDir dir;
-  io::GltfExportOptions stick;
+  io::GltfExportOptions stick, shapes;
   stick.stick_figure = true;
-  for (const char* name : {"h.gltf", "h.glb", "h_stick.glb"}) {
+  shapes.shape_mesh = true;
+  const std::map<std::string, io::GltfExportOptions> files = {{"h.gltf", {}},
+                                                              {"h.glb", {}},
+                                                              {"h_stick.glb", stick},
+                                                              {"h_shapes.gltf", shapes},
+                                                              {"h_shapes.glb", shapes}};
+  for (const auto& [name, options] : files) {
     const std::string path = dir.path(name);
-    io::save_gltf_file(path, *m, &clip, nullptr,
-                       std::string(name) == "h_stick.glb" ? stick : io::GltfExportOptions{});
+    io::save_gltf_file(path, *m, &clip, nullptr, options);
     const Json r = gltf_test::three_read(path, "keys");
     ASSERT_EQ(r["animations"], 1);
+    // one SkinnedMesh with a material per mesh written, bound to every link
+    const bool mesh = options.stick_figure || options.shape_mesh;
+    ASSERT_EQ(r["skinned_meshes"].size(), mesh ? 1u : 0u) << name;
+    for (const Json& sm : r["skinned_meshes"]) {
+      EXPECT_GT(sm["vertices"].get<int>(), 0) << name;
+      EXPECT_TRUE(sm["material"].get<bool>()) << name;
+      EXPECT_EQ(sm["bones"].get<int>(), m->nlinks()) << name;
+    }
     // three.js made every link a Bone (the skin lists them all)
     EXPECT_EQ(static_cast<int>(r["bones"].size()), m->nlinks()) << name;
     ASSERT_EQ(static_cast<int>(r["frames"].size()), clip.size());
@@ -638,8 +655,8 @@ TEST(GltfExport, ThreeJsGltfLoaderSeesOurForwardKinematics) {
         worst_r = std::max(worst_r, max_abs(q.toRotationMatrix() - data.X_W[i].R));
       }
     }
-    std::printf("  three.js %-12s %d frames: max position error %.3g m, rotation %.3g\n", name,
-                clip.size(), worst_p, worst_r);
+    std::printf("  three.js %-14s %d frames: max position error %.3g m, rotation %.3g\n",
+                name.c_str(), clip.size(), worst_p, worst_r);
     EXPECT_LE(worst_p, kThreeTolerance) << name;
     EXPECT_LE(worst_r, kThreeTolerance) << name;
   }
@@ -664,17 +681,16 @@ TEST(GltfExport, AssimpCliReadsOurGltfAndGlb) {
     if (w.label.rfind("human48", 0) != 0) continue;
     // skeleton-only files need the raw import: assimp's default post-processing drops the
     // materials no mesh uses and then refuses a scene without any ("No materials remaining")
-    const bool has_mesh =
-        w.label.find("stick") != std::string::npos || w.label.find("skinned") != std::string::npos;
+    const bool has_mesh = w.label.find("stick") != std::string::npos ||
+                          w.label.find("shapes") != std::string::npos ||
+                          w.label.find("skinned") != std::string::npos;
     const gltf_test::CommandResult r =
         gltf_test::run("assimp info " + gltf_test::quote(w.path) + (has_mesh ? "" : " -r"), true);
     ASSERT_EQ(r.status, 0) << w.label << "\n" << r.out;
     EXPECT_NE(r.out.find("Importing file ...                   OK"), std::string::npos) << r.out;
     // nodes: the links, the mesh nodes, and the root assimp adds above several scene roots;
     // bones: assimp makes one per skin joint for each skinned mesh
-    const int meshes = w.label.find("skinned") != std::string::npos ? 2
-                       : w.label.find("stick") != std::string::npos ? 1
-                                                                    : 0;
+    const int meshes = w.label.find("skinned") != std::string::npos ? 2 : has_mesh ? 1 : 0;
     EXPECT_EQ(info_count(r.out, "Nodes:"), m->nlinks() + meshes + (meshes > 0 ? 1 : 0))
         << w.label << "\n"
         << r.out;

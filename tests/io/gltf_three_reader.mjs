@@ -2,6 +2,7 @@
 // animation with an AnimationMixer and prints, for every sample time, the world position and
 // world quaternion of every glTF node (by node index), as one JSON document:
 //   {"nodes": N, "bones": [node indices three.js made Bones], "animations": A, "times": [...],
+//    "skinned_meshes": [{"vertices", "material" (a MeshStandardMaterial), "bones"}, ...],
 //    "frames": [[[px, py, pz, qx, qy, qz, qw] or null, ... per node], ... per time]}
 // Usage: node gltf_three_reader.mjs <node_modules folder> <file> keys [animation]
 //          samples at the animation's own key times (the first track's input)
@@ -47,6 +48,15 @@ gltf.scene.traverse((o) => {
 });
 const bones = [];
 objectOfNode.forEach((o, i) => { if (o && o.isBone) bones.push(i); });
+const skinnedMeshes = [];
+gltf.scene.traverse((o) => {
+  if (!o.isSkinnedMesh) return;
+  skinnedMeshes.push({
+    vertices: o.geometry.attributes.position.count,
+    material: Boolean(o.material && o.material.isMeshStandardMaterial),
+    bones: o.skeleton.bones.length,
+  });
+});
 
 const animationIndex = Number(mode === 'keys' ? (rest[0] ?? 0) : (rest[3] ?? 0));
 const clip = gltf.animations[animationIndex];
@@ -79,5 +89,6 @@ for (const t of times) {
   }));
 }
 console.log(JSON.stringify({
-  nodes: nodeCount, bones, animations: gltf.animations.length, times, frames,
+  nodes: nodeCount, bones, animations: gltf.animations.length, times,
+  skinned_meshes: skinnedMeshes, frames,
 }));

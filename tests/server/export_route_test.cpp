@@ -1,13 +1,15 @@
 // Tests of GET /api/sessions/{id}/export (server/http_routes.cpp) over real sockets: a character
 // uploaded as BVH exports in its own unit and per-joint orders by default, `units` and `order`
 // change them, bad values are refused naming the parameter, and a restarted server still
-// exports the same file.
+// exports the same file; glTF and GLB exports of a character without a skinned mesh carry its
+// shapes as a mesh with a material.
 #include "tests/server/server_fixture.hpp"
 
 #include <string>
 #include <vector>
 
 #include "io/bvh.hpp"
+#include "tests/io/gltf_reader.hpp"
 
 namespace {
 
@@ -95,6 +97,34 @@ TEST_F(ExportRouteTest, BadUnitsOrOrderAreRefusedNamingTheParameter) {
   const Created human = create_session();
   EXPECT_EQ(orders(exported(human, "format=bvh&order=source"))[0], "ZXY");
   EXPECT_EQ(orders(exported(human, "format=bvh&order=ZYX"))[0], "ZYX");
+}
+
+TEST_F(ExportRouteTest, GltfAndGlbOfADefaultSessionCarryItsShapesAsAMeshWithAMaterial) {
+  const Created s = create_session();
+  for (const std::string format : {"glb", "gltf"}) {
+    const auto res = get_export(s, "format=" + format);
+    ASSERT_TRUE(res && res->status == 200) << (res ? res->body : "no reply");
+    std::vector<std::string> errors;
+    const gltf_test::Document doc =
+        format == "glb" ? gltf_test::parse_glb(
+                              std::vector<std::uint8_t>(res->body.begin(), res->body.end()), errors)
+                        : gltf_test::parse_gltf(res->body, errors);
+    gltf_test::check_layout(doc, errors);
+    for (const std::string& e : errors) ADD_FAILURE() << format << ": " << e;
+    const json& j = doc.json;
+    ASSERT_EQ(j["meshes"].size(), 1u) << format;
+    EXPECT_EQ(j["meshes"][0]["name"], "shapes");
+    const json& prim = j["meshes"][0]["primitives"][0];
+    ASSERT_TRUE(prim.contains("material")) << format;
+    ASSERT_EQ(j["materials"].size(), 1u) << format;
+    EXPECT_EQ(j["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"].size(), 4u);
+    EXPECT_GT(j["accessors"][prim["attributes"]["POSITION"].get<int>()]["count"].get<int>(), 0);
+    EXPECT_TRUE(prim["attributes"].contains("JOINTS_0")) << format;
+    int skinned_nodes = 0;
+    for (const json& n : j["nodes"])
+      skinned_nodes += n.contains("mesh") && n.value("skin", -1) == 0;
+    EXPECT_EQ(skinned_nodes, 1) << format;
+  }
 }
 
 TEST_F(ExportRouteTest, ARestartedServerExportsTheSameFile) {

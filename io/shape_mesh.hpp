@@ -1,5 +1,6 @@
 // Triangle meshes of primitive shapes (capsules, spheres, cylinders, boxes) with outward normals
-// and a colour per vertex, appended to one indexed mesh that is drawn in a single call.
+// and a colour per vertex, appended to one indexed mesh: the figure of a thumbnail
+// (server/thumbnail_scene.hpp) and the shape mesh of a glTF export (io/gltf.hpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -10,7 +11,7 @@
 #include "core/model.hpp"
 #include "core/spatial.hpp"
 
-namespace server {
+namespace io {
 
 /// Interleaved vertices (position, normal, linear RGB colour: 9 floats) and triangle indices.
 struct TriangleMesh {
@@ -59,6 +60,10 @@ void append_segment(TriangleMesh& mesh,
                     double radius,
                     const Eigen::Vector3f& colour);
 
+/// The shapes drawn for link `link`: its visual shapes when one of them is a primitive, else its
+/// collision shapes when one of them is, else nullptr (mesh shapes are never tessellated).
+const std::vector<core::Geometry>* primitive_shapes(const core::Model& model, int link);
+
 /// A primitive shape of a link (X_FS = pose of the shape frame). Returns false, appending
 /// nothing, for a mesh shape.
 bool append_geometry(TriangleMesh& mesh,
@@ -66,4 +71,4 @@ bool append_geometry(TriangleMesh& mesh,
                      const core::Geometry& g,
                      const Eigen::Vector3f& colour);
 
-}  // namespace server
+}  // namespace io

@@ -1,11 +1,12 @@
-#include "server/shape_mesh.hpp"
+#include "io/shape_mesh.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
 
-namespace server {
+namespace io {
 
 std::uint32_t TriangleMesh::add_vertex(const Eigen::Vector3f& p,
                                        const Eigen::Vector3f& n,
@@ -163,6 +164,22 @@ void append_segment(TriangleMesh& mesh,
   append_capsule(mesh, core::Transform{R, 0.5 * (a_F + b_F)}, radius, length, colour);
 }
 
+namespace {
+
+bool has_primitive(const std::vector<core::Geometry>& shapes) {
+  return std::any_of(shapes.begin(), shapes.end(), [](const core::Geometry& g) {
+    return g.shape != core::Geometry::Shape::kMesh;
+  });
+}
+
+}  // namespace
+
+const std::vector<core::Geometry>* primitive_shapes(const core::Model& model, int link) {
+  if (has_primitive(model.visual[link])) return &model.visual[link];
+  if (has_primitive(model.collision[link])) return &model.collision[link];
+  return nullptr;
+}
+
 bool append_geometry(TriangleMesh& mesh,
                      const core::Transform& X_FS,
                      const core::Geometry& g,
@@ -186,4 +203,4 @@ bool append_geometry(TriangleMesh& mesh,
   return false;
 }
 
-}  // namespace server
+}  // namespace io
