@@ -116,12 +116,12 @@ void Session::drag_begin(int link,
   }
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
-  drag_ = Drag{.link = link,
-               .p_LinkPoint = p_LinkPoint,
-               .target_W = target_W,
-               .rotation = std::nullopt,
-               .previous_target_W = target_W,
-               .root_R_W = data_.X_W[1].R};
+  drag_.emplace();
+  drag_->link = link;
+  drag_->p_LinkPoint = p_LinkPoint;
+  drag_->target_W = target_W;
+  drag_->previous_target_W = target_W;
+  drag_->root_R_W = data_.X_W[1].R;
   floor_gesture_ = false;  // the floor's contacts are taken afresh for this gesture
   if (in_motion) {
     start_motion_edit();
@@ -387,6 +387,31 @@ ik::LinkTask Session::drag_task() const {
   return d;
 }
 
+double Session::drag_error() const {
+  const ik::TaskError e = ik::link_task_error(data_, drag_task());
+  constexpr double kMetresPerRadian = 0.1;  // a hand's length: a radian off weighs as 10 cm
+  return e.position + kMetresPerRadian * e.orientation;
+}
+
+void Session::rest_when_out_of_reach(bool target_moved) {
+  // a drag whose target stays put and whose error stopped shrinking has reached what it can: the
+  // figure rests at the pose that came nearest, instead of cycling (at an out-of-reach target
+  // with the arm straight, the references bend the elbow and the drag straightens it again, a
+  // cycle at the step limit). A target that moves again starts afresh.
+  constexpr double kProgress = 1e-5;  // m: less than this over kStallFrames is no progress
+  constexpr int kStallFrames = 15;    // a quarter of a second at 60 Hz
+  const double error = drag_error();
+  if (target_moved || error < drag_->best_error - kProgress) {
+    drag_->best_error = error;
+    drag_->best_q = doc_.q;
+    drag_->frames_without_progress = 0;
+    return;
+  }
+  if (++drag_->frames_without_progress < kStallFrames) return;
+  doc_.q = drag_->best_q;
+  refresh_kinematics();
+}
+
 void Session::touch_floor() {
   if (!doc_.settings.floor) {
     floor_gesture_ = false;
@@ -425,6 +450,8 @@ bool Session::solve_step() {
     return false;
   }
   frame_start_q_ = doc_.q;
+  const bool drag_target_moved =
+      drag_ && (drag_task().target_W - drag_->previous_target_W).norm() > 0.0;
   solver_->step(problem_, data_, doc_.q);
   if (drag_) drag_->previous_target_W = drag_task().target_W;
   // links the step carried below the floor are held on it, and lifted back within this frame
@@ -438,6 +465,7 @@ bool Session::solve_step() {
   if (pin_hold_->hold(doc_.settings, problem_, data_, doc_.q).corrections > 0) {
     solver_->refresh_report(problem_, data_, doc_.q);  // the readouts show the corrected pose
   }
+  if (drag_) rest_when_out_of_reach(drag_target_moved);
   // keep ticking while anything still moves noticeably (pins recovering after a drag). The
   // frame's net motion counts, not a step's: a step and the pins' correction may undo each
   // other on every frame of a figure at rest.

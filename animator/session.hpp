@@ -256,6 +256,10 @@ class Session {
   void physics_tick(double dt, TickResult& result);
   bool solve_step();
   /// Before a step: starts the gesture's floor contacts if it has none (settings.floor).
+  /// The dragged point's distance from its target (plus 0.1 m per radian in pose mode).
+  double drag_error() const;
+  /// Holds the figure at the pose nearest the target once a still drag stops making progress.
+  void rest_when_out_of_reach(bool target_moved);
   void touch_floor();
   /// After a step: holds links that went below the floor on it; true when any did.
   bool went_under_floor();
@@ -294,6 +298,10 @@ class Session {
     double floor_y = -std::numeric_limits<double>::infinity();
     // a drag over a paused clip edits the frame shown; its end keeps the edit as a layer
     int edit_frame = -1;
+    // the pose that came nearest the (still) target, and how long the drag has not improved on it
+    double best_error = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd best_q;
+    int frames_without_progress = 0;
   };
   std::optional<Drag> drag_;
   std::optional<Document> gesture_before_;

@@ -102,3 +102,65 @@ TEST(PinStrength, SoftPinsGiveWayToTheDrag) {
 }
 
 }  // namespace
+
+namespace {
+
+struct Hold {
+  double drift = 0;        // a pinned foot from its pin, any frame (m)
+  double joint_speed = 0;  // the fastest joint over the hold's second half (rad/s)
+  double hand_motion = 0;  // how far the hand moved over the hold's second half (m)
+  double reach_error = 0;  // hand to target at the end (m)
+};
+
+// both feet pinned, a hand pulled `far` metres sideways in half a second and then held there
+Hold hold_out_of_reach(Session& s, const Vector3& far) {
+  const char* feet[] = {"l_foot", "r_foot"};
+  Vector3 pinned[2];
+  for (int k = 0; k < 2; ++k) {
+    s.pin(s.model().link_index(feet[k]), ik::TaskMode::kPose);
+    pinned[k] = position(s, feet[k]);
+  }
+  const Vector3 hand0 = position(s, "r_hand");
+  s.drag_begin(s.model().link_index("r_hand"), hand0);
+  Hold out;
+  Vector3 hand_mid = hand0;
+  constexpr double kDt = 1.0 / 60;
+  for (int frame = 1; frame <= 150; ++frame) {
+    s.drag_move(hand0 + far * std::min(1.0, frame / 30.0));
+    const Eigen::VectorXd before = s.q();
+    s.tick(kDt);
+    for (int k = 0; k < 2; ++k) {
+      out.drift = std::max(out.drift, (position(s, feet[k]) - pinned[k]).norm());
+    }
+    if (frame == 90) hand_mid = position(s, "r_hand");
+    if (frame > 90) {
+      Eigen::VectorXd dq(s.model().nv);
+      core::difference(s.model(), before, s.q(), dq);
+      const double v = dq.cwiseAbs().maxCoeff() / kDt;
+      out.joint_speed = std::max(out.joint_speed, v);
+    }
+  }
+  out.hand_motion = (position(s, "r_hand") - hand_mid).norm();
+  out.reach_error = (position(s, "r_hand") - (hand0 + far)).norm();
+  s.drag_end();
+  return out;
+}
+
+// An unreachable drag leaves the pins where they are and the hand stops at the nearest point it
+// can reach, calmly: held still, the figure comes to rest instead of moving on the step limit.
+TEST(PinStrength, AnOutOfReachDragIsHeldCalmly) {
+  for (const Vector3& far : {Vector3(2.0, 0, 0), Vector3(0, 2.0, 0), Vector3(0, -1.5, 0.8)}) {
+    Session s(human(), "human48");
+    const Hold h = hold_out_of_reach(s, far);
+    std::printf(
+        "out of reach (%.1f, %.1f, %.1f): pin drift %.3f mm, joint speed %.4f rad/s, hand "
+        "moved %.3f mm over the last second, %.2f m short\n",
+        far.x(), far.y(), far.z(), h.drift * 1e3, h.joint_speed, h.hand_motion * 1e3,
+        h.reach_error);
+    EXPECT_LT(h.drift, 1e-3);
+    EXPECT_LT(h.joint_speed, 0.05);
+    EXPECT_LT(h.hand_motion, 1e-3);
+  }
+}
+
+}  // namespace
