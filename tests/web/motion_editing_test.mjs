@@ -22,9 +22,9 @@ before(async () => ({ server, browser } = await fixture.start()));
 
 const session = (page) => page.evaluate(() => window.pindrag.session);
 
-/** Records about a second of the right hand moved up and down with the mouse; it becomes the clip. */
-async function recordClip(page) {
-  const from = await handle(page, 'r_hand');
+/** Records about a second of a link (the right hand) moved with the mouse; it becomes the clip. */
+async function recordClip(page, link = 'r_hand', path = (k) => ({ dx: k, dy: -60 * Math.sin((Math.PI * k) / 6) })) {
+  const from = await handle(page, link);
   // (the record button blinks while recording: clicked without waiting for it to stand still)
   const toggleRecord = () => page.$eval('#tl-record', (b) => b.click());
   await toggleRecord();
@@ -33,8 +33,8 @@ async function recordClip(page) {
   await page.mouse.down();
   const start = Date.now();
   for (let k = 1; Date.now() - start < 1000; k++) {
-    const dy = -60 * Math.sin((Math.PI * k) / 6);
-    await page.mouse.move(from.x + k, from.y + dy);
+    const { dx, dy } = path(k);
+    await page.mouse.move(from.x + dx, from.y + dy);
     await page.waitForTimeout(30);
   }
   await page.mouse.up();
@@ -57,6 +57,8 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
 
   // a pin on the right hand, which the clip moves; then play at 1x
   await page.click('#tl-first');
+  await page.waitForFunction(() => window.pindrag.lastPose?.time === 0, null, { timeout: 5000 });
+  await page.waitForTimeout(100);
   const h = await handle(page, 'r_hand');
   await page.mouse.click(h.x, h.y, { button: 'right' });
   await page.waitForFunction(() => (window.pindrag.session?.pins || []).some((p) => p.link === 'r_hand'), null, { timeout: 5000 });
@@ -114,6 +116,44 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
   await page.waitForFunction(() => document.querySelectorAll('#layer-list li').length === 0, null, { timeout: 5000 });
   phase('layer muted and deleted');
   await page.screenshot({ path: path.join(out, 'layers.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('"follow" keeps the camera on a travelling figure, and "slow while dragging" slows the clip for the gesture only', async () => {
+  const { page, context, problems } = await openPage(browser, server.url);
+  await recordClip(page, 'pelvis', (k) => ({ dx: Math.min(6 * k, 120), dy: 0 })); // the root travels sideways
+  await page.click('#view-options label:has-text("follow") input');
+  await page.click('#tl-first');
+  await page.waitForTimeout(300);
+  const camera0 = await page.evaluate(() => window.pindrag.camera());
+  const root0 = await page.evaluate(() => window.pindrag.linkPosition('pelvis'));
+  await page.click('#tl-last');
+  await page.waitForTimeout(300);
+  const camera1 = await page.evaluate(() => window.pindrag.camera());
+  const root1 = await page.evaluate(() => window.pindrag.linkPosition('pelvis'));
+  const moved = Math.hypot(root1[0] - root0[0], root1[2] - root0[2]);
+  const off = Math.hypot(camera1.target[0] - camera0.target[0] - (root1[0] - root0[0]), camera1.target[2] - camera0.target[2] - (root1[2] - root0[2]));
+  console.log(`follow: the root travelled ${(moved * 100).toFixed(1)} cm; the camera target followed it to ${(off * 1000).toFixed(3)} mm`);
+  assert.ok(moved > 0.015, `the recorded clip moved the root only ${(moved * 100).toFixed(1)} cm`);
+  assert.ok(off < 1e-3, `the camera target is ${(off * 1000).toFixed(1)} mm off the root's motion`);
+
+  // slow while dragging: a quarter speed while the hand is held, the speed it had after
+  await page.selectOption('#while-dragging', 'slow');
+  await page.click('#tl-play');
+  await page.waitForFunction(() => window.pindrag.session?.playback?.playing === true);
+  const grab = await handle(page, 'l_hand');
+  await page.mouse.move(grab.x, grab.y);
+  await page.mouse.down();
+  await page.mouse.move(grab.x - 20, grab.y - 30, { steps: 4 });
+  const cameraInDrag = await page.evaluate(() => window.pindrag.camera());
+  const slowed = await waitForServer(server, page, (s) => s.playback.speed !== 1, 'the clip did not slow down while the hand was held');
+  await page.waitForTimeout(300);
+  assert.deepEqual(await page.evaluate(() => window.pindrag.camera()), cameraInDrag, 'the camera followed during the drag');
+  await page.mouse.up();
+  const restored = await waitForServer(server, page, (s) => s.playback.speed === 1, 'the speed did not come back after the release');
+  console.log(`while dragging: speed ${slowed.playback.speed}; after: ${restored.playback.speed}`);
+  assert.equal(slowed.playback.speed, 0.25);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -1,6 +1,8 @@
 // "Follow": the camera travels with the figure. While the switch is on, every new pose moves the
 // orbit target and the camera by the root link's horizontal motion, so a walking clip stays in
-// view at the distance and angle the user chose; height and orbiting are left to the user.
+// view at the distance and angle the user chose; height and orbiting are left to the user. While a
+// link is dragged the camera stands still (a camera following the pelvis under the pointer would
+// carry the drag's target away with it), and it follows on from where the figure is after.
 
 import * as THREE from 'three';
 
@@ -10,7 +12,7 @@ export function createCameraFollow(state, viewport, skeleton) {
   const now = new THREE.Vector3();
 
   function follow() {
-    if (!state.view.follow || !state.character) {
+    if (!state.view.follow || !state.character || state.dragging) {
       last = null;
       return;
     }
