@@ -9,9 +9,11 @@ export function bindKeyboard(state, actions, drag, viewport, skeleton) {
     signals.viewOptionsChanged.dispatch({ ...state.view });
   };
 
+  // F centres the selected link, or frames the whole figure when nothing is selected
   signals.focusRequested.add((i) => {
     const w = i >= 0 ? skeleton.linkWorld(i) : null;
     if (w) viewport.focus(w.position.clone());
+    else viewport.home();
   });
 
   window.addEventListener('keydown', (e) => {

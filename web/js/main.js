@@ -96,6 +96,7 @@ async function main() {
   const pins = createPinsView(state, viewport, skeleton, connection);
   const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
   createCameraFollow(state, viewport, skeleton);
+  frameEachNewCharacter(state, viewport, skeleton);
   createPhysicsView(state, viewport, document.getElementById('stage'));
 
   document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions));
@@ -174,6 +175,18 @@ async function main() {
     contextLost: () => viewport.renderer.getContext().isContextLost(),
     label: (i) => linkLabel(state, i),
   };
+}
+
+/** Home view frames the figure; a newly loaded character is framed once its first pose is drawn. */
+function frameEachNewCharacter(state, viewport, skeleton) {
+  viewport.subjectBounds = () => skeleton.bounds();
+  let pending = false;
+  state.signals.characterLoaded.add(() => (pending = true));
+  state.signals.poseChanged.add(() => {
+    if (!pending) return;
+    pending = false;
+    viewport.home();
+  });
 }
 
 function showCharacterInTitle(state) {

@@ -12,7 +12,7 @@ const ROWS = [
   ['I / Delete', 'insert key / delete the selected key'],
   ['R', 'record on / off'],
   ['Ctrl+Z / Ctrl+Shift+Z', 'undo / redo'],
-  ['F / Shift+F', 'focus the selection / reset the view'],
+  ['F / Shift+F', 'focus the selection (nothing selected: frame the figure) / frame the figure'],
   ['H / L', 'show handles / joint ranges'],
   ['Esc', 'cancel the drag (restores the pose) · clear the selection'],
 ];

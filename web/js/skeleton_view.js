@@ -223,6 +223,12 @@ export function createSkeletonView(state, viewport) {
     handlePositions() {
       return links.map((l) => l.handle.position);
     },
+    /** The figure's bounding box as drawn now: its shapes and every link's origin. */
+    bounds(out = new THREE.Box3()) {
+      out.setFromObject(root);
+      for (const l of links) out.expandByPoint(l.group.position);
+      return out;
+    },
     limitStatus(i) {
       return status[i];
     },

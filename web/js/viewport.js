@@ -135,9 +135,37 @@ export function createViewport(state) {
       ndc.copy(point).project(camera);
       return { x: r.left + ((ndc.x + 1) / 2) * r.width, y: r.top + ((1 - ndc.y) / 2) * r.height, visible: ndc.z < 1 };
     },
+    /** Where Home view looks: a function returning the subject's bounding box (THREE.Box3). */
+    subjectBounds: null,
+    /** Home view: the whole subject framed from the front-right, or the default view without one. */
     home() {
+      const box = this.subjectBounds ? this.subjectBounds() : null;
+      if (box && !box.isEmpty()) {
+        this.frame(box);
+        return;
+      }
       camera.position.copy(CAMERA_HOME.position);
       controls.target.copy(CAMERA_HOME.target);
+      controls.update();
+      requestRender();
+    },
+    /** Frames a box of any size: the camera looks at its centre from the home direction, at the
+     *  distance that fits its bounding sphere in the view, and the zoom limits and clipping planes
+     *  follow its size (a 1 cm gripper and a 70 m giant are both framed). */
+    frame(box) {
+      const center = box.getCenter(new THREE.Vector3());
+      const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.01);
+      const halfFov = THREE.MathUtils.degToRad(camera.fov / 2) * Math.min(1, camera.aspect);
+      const distance = (radius / Math.sin(halfFov)) * 1.05;
+      controls.minDistance = radius * 0.05;
+      controls.maxDistance = distance * 10;
+      camera.near = Math.max(1e-4, radius * 0.01);
+      camera.far = distance * 40;
+      camera.updateProjectionMatrix();
+      const direction = CAMERA_HOME.position.clone().sub(CAMERA_HOME.target).normalize();
+      controls.target.copy(center);
+      if (controls.target.y < 0) controls.target.y = 0;
+      camera.position.copy(controls.target).addScaledVector(direction, distance);
       controls.update();
       requestRender();
     },

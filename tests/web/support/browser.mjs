@@ -19,8 +19,10 @@ export async function launchBrowser() {
  * Opens the page in a fresh context and waits until it is connected and has drawn a pose.
  * Returns {page, context, problems}: problems collects page errors and console errors.
  */
-export async function openPage(browser, url, { width = 1280, height = 800 } = {}) {
+export async function openPage(browser, url, { width = 1280, height = 800, sessionStorage: stored = null } = {}) {
   const context = await browser.newContext({ viewport: { width, height }, acceptDownloads: true });
+  // entries the page finds in its tab's sessionStorage (e.g. the session to resume)
+  if (stored) await context.addInitScript((entries) => Object.entries(entries).forEach(([k, v]) => sessionStorage.setItem(k, v)), stored);
   const page = await context.newPage();
   const problems = [];
   page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));

@@ -1,0 +1,97 @@
+// The camera frames characters of any size with `pindrag serve` in headless Chromium: a figure
+// 60 m tall (a character file in metres) and the bundled human48 both open with every
+// link on screen, and Home view frames them again after the camera was moved away.
+// Usage: node tests/web/framing_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
+
+import { test, before } from 'node:test';
+import assert from 'node:assert/strict';
+import path from 'node:path';
+import { openPage } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+
+const fixture = await serverAndBrowser('framing');
+const out = fixture.out;
+
+let browser;
+let server;
+before(async () => ({ server, browser } = await fixture.start()));
+
+// a figure 60 m tall: a trunk on a free joint and a head on a neck joint, in metres
+const GIANT = JSON.stringify({
+  format: 'pindrag-character',
+  version: 1,
+  name: 'giant',
+  links: [
+    {
+      name: 'trunk',
+      joint: { type: 'free', origin: { xyz: [0, 25, 0] } },
+      inertial: { mass: 5000, com: [0, 0, 0], inertia: { ixx: 1e5, iyy: 1e5, izz: 1e5 } },
+      collision: [{ shape: 'capsule', radius: 5, length: 40, origin: { xyz: [0, 0, 0], quaternion: [0.7071067811865476, 0.7071067811865476, 0, 0] } }],
+    },
+    {
+      name: 'neck',
+      parent: 'trunk',
+      joint: { name: 'neck', type: 'revolute', origin: { xyz: [0, 25, 0] }, axis: [1, 0, 0], limits: { lower: -1, upper: 1 } },
+      inertial: { mass: 500, com: [0, 5, 0], inertia: { ixx: 1e3, iyy: 1e3, izz: 1e3 } },
+      collision: [{ shape: 'box', size: [8, 10, 8], origin: { xyz: [0, 5, 0] } }],
+    },
+  ],
+});
+
+/** Creates a session from a character file and opens the page on it. */
+async function openOnUpload(name, text) {
+  const form = new FormData();
+  form.append('character', new Blob([text], { type: 'text/plain' }), name);
+  const res = await fetch(`${server.url}api/sessions`, { method: 'POST', body: form });
+  if (res.status !== 201) assert.fail(`creating a session from ${name}: ${res.status} ${await res.text()}`);
+  const { id, token } = await res.json();
+  return openPage(browser, server.url, { sessionStorage: { 'pindrag.session': JSON.stringify({ id, token }) } });
+}
+
+/** How many links are on the canvas, and the largest link height in the world. */
+async function linksOnScreen(page) {
+  return page.evaluate(() => {
+    const canvas = document.querySelector('canvas').getBoundingClientRect();
+    const names = window.pindrag.linkNames();
+    let inside = 0;
+    let top = -Infinity;
+    for (const n of names) {
+      const p = window.pindrag.project(n);
+      if (p && p.visible && p.x >= canvas.left && p.x <= canvas.right && p.y >= canvas.top && p.y <= canvas.bottom) inside++;
+      top = Math.max(top, window.pindrag.linkPosition(n)[1]);
+    }
+    return { inside, total: names.length, top };
+  });
+}
+
+async function checkFramed(page, what) {
+  const seen = await linksOnScreen(page);
+  console.log(`${what}: ${seen.inside} of ${seen.total} links on screen, top at ${seen.top.toFixed(2)} m, camera at ${JSON.stringify((await page.evaluate(() => window.pindrag.camera())).position.map((x) => +x.toFixed(2)))}`);
+  assert.equal(seen.inside, seen.total, `${what}: only ${seen.inside} of ${seen.total} links are on screen`);
+  return seen;
+}
+
+test('a 60 m figure and the bundled human are framed when they open and by Home view', async () => {
+  for (const [name, opened] of [
+    ['human48', () => openPage(browser, server.url)],
+    ['the 60 m figure', () => openOnUpload('giant.json', GIANT)],
+  ]) {
+    const { page, context, problems } = await opened();
+    await page.waitForTimeout(300);
+    const seen = await checkFramed(page, `${name} when opened`);
+    if (name !== 'human48') assert.ok(seen.top > 45, `the figure is only ${seen.top} m tall`);
+    // move the camera far off, then Home view
+    const box = await page.locator('canvas').first().boundingBox();
+    for (let k = 0; k < 15; k++) await page.mouse.wheel(0, -400); // zoom in
+    await page.mouse.move(box.x + 20, box.y + 20);
+    await page.mouse.down({ button: 'right' });
+    await page.mouse.move(box.x + 600, box.y + 400, { steps: 10 }); // pan away
+    await page.mouse.up({ button: 'right' });
+    await page.click('#view-options button:has-text("Home view")');
+    await page.waitForTimeout(200);
+    await checkFramed(page, `${name} after Home view`);
+    await page.screenshot({ path: path.join(out, `${name.replace(/\W+/g, '_')}.png`) });
+    assert.deepEqual(problems, []);
+    await context.close();
+  }
+});
