@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   cli::add_edit_command(app);
   cli::add_thumbnail_command(app);
   cli::add_simulate_command(app);
+  cli::add_fit_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }
