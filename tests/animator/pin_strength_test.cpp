@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "animator_fixtures.hpp"
@@ -22,6 +23,7 @@ struct Squat {
   double pelvis_drop = 0;      // how far the pelvis went down
   double range_violation = 0;  // the largest, any frame (rad)
   double knee_flexion = 0;     // the smaller of the two at the end (rad)
+  double hip_flexion = 0;      // the smaller of the two thighs' turn against the pelvis (rad)
   double chest_tilt = 0;       // the chest's orientation at the end against its start (rad)
 };
 
@@ -35,6 +37,14 @@ Squat squat(Session& s, double depth) {
   const Vector3 pelvis0 = position(s, "pelvis");
   const int chest = s.model().link_index("chest");
   const core::Matrix3 chest0 = s.kinematics().X_W[chest].R;
+  // a thigh's direction (hip to knee) in the pelvis frame
+  const auto thigh = [&s](const char* hip, const char* knee) {
+    const core::Model& m = s.model();
+    const core::Data& d = s.kinematics();
+    return Vector3(d.X_W[1].R.transpose() *
+                   (d.X_W[m.link_index(knee)].p - d.X_W[m.link_index(hip)].p).normalized());
+  };
+  const Vector3 l_thigh0 = thigh("l_thigh", "l_shank"), r_thigh0 = thigh("r_thigh", "r_shank");
   s.drag_begin(1, pelvis0);
   Squat out;
   for (int frame = 1; frame <= 60; ++frame) {
@@ -50,6 +60,9 @@ Squat squat(Session& s, double depth) {
   out.knee_flexion =
       std::min(s.q()[m.idx_q[m.link_index("l_shank")]], s.q()[m.idx_q[m.link_index("r_shank")]]);
   out.chest_tilt = Eigen::AngleAxisd(chest0.transpose() * s.kinematics().X_W[chest].R).angle();
+  out.hip_flexion =
+      std::min(std::acos(std::clamp(l_thigh0.dot(thigh("l_thigh", "l_shank")), -1.0, 1.0)),
+               std::acos(std::clamp(r_thigh0.dot(thigh("r_thigh", "r_shank")), -1.0, 1.0)));
   s.drag_end();
   return out;
 }
@@ -78,12 +91,13 @@ TEST(PinStrength, RestGainKeepsTheTorsoUprightInASquat) {
   without.set_solver_settings(settings);
   const Squat r0 = squat(without, 0.12);
   std::printf(
-      "rest gain %.1f: knees %.2f rad, chest tilted %.3f rad; rest gain 0: knees %.2f "
-      "rad, chest tilted %.3f rad\n",
-      with.solver_settings().reference_gain, r.knee_flexion, r.chest_tilt, r0.knee_flexion,
-      r0.chest_tilt);
+      "rest gain %.1f: knees %.2f rad, hips %.2f rad, chest tilted %.3f rad; rest gain 0: knees "
+      "%.2f rad, hips %.2f rad, chest tilted %.3f rad\n",
+      with.solver_settings().reference_gain, r.knee_flexion, r.hip_flexion, r.chest_tilt,
+      r0.knee_flexion, r0.hip_flexion, r0.chest_tilt);
   EXPECT_NEAR(r.pelvis_drop, 0.12, 0.005);
   EXPECT_GT(r.knee_flexion, 0.6) << "the knees bend";
+  EXPECT_GT(r.hip_flexion, 0.3) << "the hips bend";
   EXPECT_LT(r.chest_tilt, 0.15) << "the torso stays about as it was";
   EXPECT_LT(r.chest_tilt, 0.5 * r0.chest_tilt) << "the references make the difference";
   EXPECT_LT(r.drift, 0.001);
