@@ -8,14 +8,16 @@
 
 namespace animator {
 
+double falloff_ease(double seconds, double falloff) {
+  if (falloff <= 0 || seconds >= falloff) return 0.0;
+  return 0.5 * (1.0 + std::cos(std::numbers::pi * seconds / falloff));
+}
+
 double EditLayer::blend(int frame, double frame_time) const {
   if (muted || displacement.empty()) return 0.0;
   if (frame >= first_frame && frame <= last_frame()) return weight;
   const int gap = frame < first_frame ? first_frame - frame : frame - last_frame();
-  const double d = gap * frame_time;
-  if (falloff <= 0 || d >= falloff) return 0.0;
-  // cosine ease: 1 at the edited frames, 0 at the end of the falloff, zero slope at both ends
-  return weight * 0.5 * (1.0 + std::cos(std::numbers::pi * d / falloff));
+  return weight * falloff_ease(gap * frame_time, falloff);
 }
 
 bool EditLayer::operator==(const EditLayer& o) const {

@@ -30,6 +30,10 @@ struct EditLayer {
 
 using LayerStack = std::vector<std::shared_ptr<const EditLayer>>;
 
+/// The fade of an edit `seconds` away from its edited frames: a cosine ease from 1 (at them) to
+/// 0 at `falloff` and beyond, with zero slope at both ends; 0 for a falloff of 0.
+double falloff_ease(double seconds, double falloff);
+
 /// Frame f of the clip with the unmuted layers applied in order.
 void layered_frame(const core::Model& model,
                    const core::Clip& base,

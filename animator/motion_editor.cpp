@@ -1,8 +1,6 @@
 #include "animator/motion_editor.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <numbers>
 
 #include "core/configuration.hpp"
 #include "core/jacobian.hpp"
@@ -108,12 +106,6 @@ std::shared_ptr<const EditLayer> MotionEditor::finish(const std::string& name, d
   layer->falloff = falloff;
   layer->first_frame = recorded_.begin()->first;
   layer->displacement.resize(recorded_.rbegin()->first - layer->first_frame + 1);
-  // the cosine ease of EditLayer::blend: 1 at an edited frame, 0 beyond the falloff
-  const auto ease = [&](int frames) {
-    const double d = frames * frame_time_;
-    return falloff <= 0 || d >= falloff ? 0.0
-                                        : 0.5 * (1.0 + std::cos(std::numbers::pi * d / falloff));
-  };
   for (auto it = recorded_.begin(); it != recorded_.end(); ++it) {
     const int a = it->first;
     const Eigen::VectorXd& da = it->second.displacement;
@@ -129,8 +121,8 @@ std::shared_ptr<const EditLayer> MotionEditor::finish(const std::string& name, d
         wb = double(f - a) / double(b - a);
         wa = 1.0 - wb;
       } else {
-        wa = ease(f - a);
-        wb = ease(b - f);
+        wa = falloff_ease((f - a) * frame_time_, falloff);
+        wb = falloff_ease((b - f) * frame_time_, falloff);
         const double sum = wa + wb;
         if (sum > 1.0) wa /= sum, wb /= sum;
       }

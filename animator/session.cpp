@@ -129,9 +129,7 @@ void Session::drag_begin(int link,
     // a paused clip: the drag edits the frame shown (the nearest frame, shown exactly), and
     // pins are moving pins that hold where their links are at that frame, not where they were
     // when pinned at another frame
-    const int frame =
-        std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
-                   doc_.clip->size() - 1);
+    const int frame = clip_frame_at(playback_.time);
     drag_->edit_frame = frame;
     playback_.time = frame * doc_.clip->frame_time;
     layered_frame(*model_, *doc_.clip, doc_.layers, frame, doc_.q);
@@ -305,14 +303,24 @@ void Session::show_animation_at(double t) {
   refresh_kinematics();
 }
 
+int Session::clip_frame_at(double t) const {
+  return std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
+                    doc_.clip->size() - 1);
+}
+
+std::pair<double, double> Session::play_range() const {
+  const double length = duration();
+  if (!playback_.loop) return {0.0, length};
+  return {std::min(playback_.loop_start, length),
+          playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length};
+}
+
 // --- editing in motion ---------------------------------------------------------------------------
 
 void Session::start_motion_edit() {
   ik::SolverSettings s = motion_edit_settings(doc_.clip->frame_time);
   motion_editor_.emplace(*model_, s);
-  motion_edit_frame_ =
-      std::clamp(static_cast<int>(std::lround(playback_.time / doc_.clip->frame_time)), 0,
-                 doc_.clip->size() - 1);
+  motion_edit_frame_ = clip_frame_at(playback_.time);
   motion_editor_->begin(*doc_.clip, doc_.layers, motion_edit_frame_);
 }
 
@@ -479,23 +487,17 @@ bool Session::solve_step() {
 
 void Session::edit_in_motion(double t, TickResult& result) {
   // solve every clip frame the clock passed since the last tick
-  const int frame = std::clamp(static_cast<int>(std::lround(t / doc_.clip->frame_time)), 0,
-                               doc_.clip->size() - 1);
+  const int frame = clip_frame_at(t);
   const ik::LinkTask d = drag_task();
   if (frame < motion_edit_frame_) {
     // the clock wrapped to the loop's start: the frames up to the loop's end are solved, and the
     // same edit goes on from the start, so one gesture makes one layer however many times the
     // loop comes round
-    const double length = duration();
-    const double ft = doc_.clip->frame_time;
-    const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
-    const double end =
-        playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
-    const int end_frame = std::min(static_cast<int>(std::lround(end / ft)), doc_.clip->size() - 1);
-    for (int f = motion_edit_frame_ + 1; f <= end_frame; ++f) {
+    const auto [start, end] = play_range();
+    for (int f = motion_edit_frame_ + 1; f <= clip_frame_at(end); ++f) {
       motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
     }
-    motion_edit_frame_ = std::clamp(static_cast<int>(std::lround(start / ft)), 0, frame) - 1;
+    motion_edit_frame_ = std::min(clip_frame_at(start), frame) - 1;
   }
   for (int f = motion_edit_frame_ + 1; f <= frame; ++f) {
     motion_editor_->edit(*doc_.clip, doc_.layers, f, doc_.pins, d);
@@ -514,9 +516,7 @@ Session::TickResult Session::tick(double dt) {
     physics_tick(dt, result);
   } else if (playback_.playing && length > 0) {
     double t = playback_.time + dt * playback_.speed;
-    const double start = playback_.loop ? std::min(playback_.loop_start, length) : 0.0;
-    const double end =
-        playback_.loop && playback_.loop_end >= 0 ? std::min(playback_.loop_end, length) : length;
+    const auto [start, end] = play_range();
     if (playback_.loop && end > start) {
       if (t > end || t < start)
         t = start + std::fmod(std::fmod(t - start, end - start) + (end - start), end - start);

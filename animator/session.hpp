@@ -16,6 +16,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "animator/document.hpp"
@@ -255,17 +256,21 @@ class Session {
   void sync_physics(bool restart);
   void physics_tick(double dt, TickResult& result);
   bool solve_step();
-  /// Before a step: starts the gesture's floor contacts if it has none (settings.floor).
   /// The dragged point's distance from its target (plus 0.1 m per radian in pose mode).
   double drag_error() const;
   /// Holds the figure at the pose nearest the target once a still drag stops making progress.
   void rest_when_out_of_reach(bool target_moved);
+  /// Before a step: starts the gesture's floor contacts if it has none (settings.floor).
   void touch_floor();
   /// After a step: holds links that went below the floor on it; true when any did.
   bool went_under_floor();
   /// Extra solver steps a frame takes to lift links that went below the floor back onto it.
   static constexpr int kFloorCorrections = 2;
   void show_animation_at(double t);
+  /// The clip frame nearest clip time t.
+  int clip_frame_at(double t) const;
+  /// The times playback runs between: the loop's [start, end] when looping, else the animation.
+  std::pair<double, double> play_range() const;
   void start_motion_edit();
   void finish_motion_edit();
   /// The pose a drag left at a paused clip's frame, kept as a one-frame layer with the falloff.

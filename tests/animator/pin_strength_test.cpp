@@ -27,13 +27,16 @@ struct Squat {
   double chest_tilt = 0;       // the chest's orientation at the end against its start (rad)
 };
 
+const char* const feet[] = {"l_foot", "r_foot"};
+
+// pins a foot in pose where it stands; returns where that is
+Vector3 pin_foot(Session& s, const char* foot) {
+  s.pin(s.model().link_index(foot), ik::TaskMode::kPose);
+  return position(s, foot);
+}
+
 Squat squat(Session& s, double depth) {
-  const char* feet[] = {"l_foot", "r_foot"};
-  Vector3 pinned[2];
-  for (int k = 0; k < 2; ++k) {
-    s.pin(s.model().link_index(feet[k]), ik::TaskMode::kPose);
-    pinned[k] = position(s, feet[k]);
-  }
+  const Vector3 pinned[2] = {pin_foot(s, feet[0]), pin_foot(s, feet[1])};
   const Vector3 pelvis0 = position(s, "pelvis");
   const int chest = s.model().link_index("chest");
   const core::Matrix3 chest0 = s.kinematics().X_W[chest].R;
@@ -128,12 +131,7 @@ struct Hold {
 
 // both feet pinned, a hand pulled `far` metres sideways in half a second and then held there
 Hold hold_out_of_reach(Session& s, const Vector3& far) {
-  const char* feet[] = {"l_foot", "r_foot"};
-  Vector3 pinned[2];
-  for (int k = 0; k < 2; ++k) {
-    s.pin(s.model().link_index(feet[k]), ik::TaskMode::kPose);
-    pinned[k] = position(s, feet[k]);
-  }
+  const Vector3 pinned[2] = {pin_foot(s, feet[0]), pin_foot(s, feet[1])};
   const Vector3 hand0 = position(s, "r_hand");
   s.drag_begin(s.model().link_index("r_hand"), hand0);
   Hold out;

@@ -3,8 +3,8 @@
 // camera-facing plane through the grabbed point (constant depth). Orbit is off for the whole
 // gesture, and the press never reaches the orbit controls. A press that does not move is a click
 // (select). Right-click toggles a pin. A gesture on a playing clip may slow or pause it until the
-// release (the view option "while dragging"). The ghost (sphere and spring) shows the target until the
-// server's pose acknowledges it.
+// release (the view option "while dragging"). The ghost (sphere and spring) shows the target until
+// the server's pose acknowledges it.
 
 import * as THREE from 'three';
 import { msg } from './protocol.js';

@@ -1,11 +1,12 @@
 // Pins in the 3D view: a marker at every pin target (with a line to the pinned point when the pin
-// drifts; over a clip, where pins move with the motion, at the pinned point of the frame shown), and a TransformControls gizmo on the selected link's pin that moves its target
-// (move_pin, latest-wins once per animation frame). Orbit is off while the gizmo is dragged.
+// drifts; over a clip, where pins move with the motion, at the pinned point of the frame shown),
+// and a TransformControls gizmo on the selected link's pin that moves its target (move_pin,
+// latest-wins once per animation frame). Orbit is off while the gizmo is dragged.
 
 import * as THREE from 'three';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
 import { msg } from './protocol.js';
-import { pinOf } from './state.js';
+import { pinOf, pinsMove } from './state.js';
 
 const PIN_COLOR = 0xff9d1c;
 
@@ -64,7 +65,7 @@ export function createPinsView(state, viewport, skeleton, connection) {
   function syncGizmo() {
     const pin = pinOf(state, state.selected);
     // a moving pin (over a clip) has no fixed target to move
-    if (!pin || !pin.target || state.session?.clip) {
+    if (!pin || !pin.target || pinsMove(state)) {
       gizmoPin = null;
       gizmo.detach();
       helper.visible = false;
@@ -86,7 +87,7 @@ export function createPinsView(state, viewport, skeleton, connection) {
 
   function syncMarkers() {
     const pins = state.session?.pins || [];
-    const moving = !!state.session?.clip; // moving pins (editing in motion, Yamane eq. 8.30)
+    const moving = pinsMove(state);
     const names = new Set(pins.map((p) => p.link));
     for (const [name, m] of markers) {
       if (!names.has(name)) {

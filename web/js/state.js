@@ -95,6 +95,12 @@ export function pinOf(state, link) {
   return (state.session.pins || []).find((p) => p.link === name) || null;
 }
 
+/** Whether pins move with the motion: over a clip they follow their links' trajectories
+ *  (editing in motion, Yamane eq. 8.30) instead of holding a fixed target. */
+export function pinsMove(state) {
+  return !!state.session?.clip;
+}
+
 /** Display name of a link. */
 export function linkLabel(state, link) {
   const l = state.character?.links[link];
