@@ -28,7 +28,8 @@ nlohmann::json character_summary(const core::Model& m, const std::vector<std::st
   return out;
 }
 
-// a clip file: the character it animates and the clip (frames, timing, animated joints)
+// a clip file: the character it animates and the clip (frames, timing, animated joints; for BVH
+// the unit and which joints with position channels translate)
 nlohmann::json clip_summary(const std::string& path) {
   const ClipFile f = read_clip_file(path);
   const core::Model& m = *f.model;
@@ -41,7 +42,14 @@ nlohmann::json clip_summary(const std::string& path) {
   clip["fps"] = 1.0 / f.clip.frame_time;
   clip["duration"] = f.clip.duration();
   clip["joints"] = f.bvh_layout ? static_cast<int>(f.bvh_layout->joints.size()) : moving;
-  if (f.bvh_layout) clip["unit"] = f.unit;
+  if (f.bvh_layout) {
+    clip["unit"] = f.unit;
+    // non-root joints with position channels: constant ones import as rotational joints at that
+    // offset, moving ones as free joints (io/bvh_import.hpp)
+    const io::BvhTranslationJoints moved = io::bvh_translation_joints(m, *f.bvh_layout);
+    clip["constant_translations"] = moved.constant;
+    clip["translating_joints"] = moved.translating;
+  }
   if (!f.clip_name.empty()) clip["name"] = f.clip_name;
   if (f.clips_in_file != 1) clip["animations_in_file"] = f.clips_in_file;
   if (f.skin && !f.skin->empty()) {

@@ -145,14 +145,77 @@ std::vector<std::string> link_names(const BvhDocument& doc) {
   return link_name;
 }
 
+// Where each node's joint sits in its parent's frame (file units) and whether a non-root joint
+// with position channels becomes rotational because its translation is constant over the frames
+// to within kBvhConstantTranslationTolerance · figure (metres; `s` metres per file unit). The
+// constant is the midrange of each component, which makes the largest deviation the smallest.
+struct JointOrigins {
+  std::vector<Vector3> origin;  // OFFSET, or the constant translation of a rotational joint
+  std::vector<char> rotational;
+};
+
+JointOrigins joint_origins(const BvhDocument& doc,
+                           const std::vector<std::string>& link_name,
+                           const std::string& source_name,
+                           const Model* joint_types_of,
+                           double s,
+                           double figure) {
+  const std::size_t n = doc.nodes.size();
+  JointOrigins out;
+  out.origin.resize(n);
+  out.rotational.assign(n, 0);
+  std::vector<int> candidates;
+  for (std::size_t i = 0; i < n; ++i) {
+    const BvhNode& node = doc.nodes[i];
+    out.origin[i] = node.offset;
+    if (node.parent >= 0 && !node.is_end_site() && has_position(node) && doc.frames > 0) {
+      candidates.push_back(static_cast<int>(i));
+    }
+  }
+  if (candidates.empty()) return out;
+  std::vector<Vector3> lo(candidates.size(), Vector3::Constant(kInfinity));
+  std::vector<Vector3> hi(candidates.size(), Vector3::Constant(-kInfinity));
+  for (int f = 0; f < doc.frames; ++f) {
+    const double* values = doc.frame(f);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      const BvhNode& node = doc.nodes[candidates[k]];
+      const Vector3 t = bvh_joint_translation(node, values + node.first_value);
+      lo[k] = lo[k].cwiseMin(t);
+      hi[k] = hi[k].cwiseMax(t);
+    }
+  }
+  const double tolerance = kBvhConstantTranslationTolerance * figure;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    // values are finite and at most kMaxBvhMagnitude: no overflow
+    const bool constant = 0.5 * (hi[k] - lo[k]).maxCoeff() * s <= tolerance;
+    if (joint_types_of) {
+      const int link = joint_types_of->link_index(link_name[candidates[k]]);
+      if (link > 0 && joint_types_of->joint_type[link] == JointType::kFree) continue;
+      if (link > 0 && !constant) {
+        fail(source_name, "joint \"" + doc.nodes[candidates[k]].name +
+                              "\" translates in this clip, but the character it is loaded onto "
+                              "has it rotational (rule: a joint's position channels may move only "
+                              "where the character's joint is free)");
+      }
+    }
+    if (!constant) continue;
+    out.rotational[candidates[k]] = 1;
+    out.origin[candidates[k]] = 0.5 * (lo[k] + hi[k]);
+  }
+  return out;
+}
+
 // The skeleton as a model: `s` metres per file unit, `figure` the size for the radii.
 std::shared_ptr<const Model> build_model(const BvhDocument& doc,
                                          const std::string& source_name,
                                          const std::vector<std::string>& link_name,
+                                         const JointOrigins& joints,
                                          double s,
                                          double figure,
                                          double total_mass) {
-  // bones: from each joint to its children; mass in proportion to their length
+  // bones: from each joint to its children's OFFSETs (also for a child at a constant translation:
+  // the figure's size, which bounds the radii, is that of the OFFSETs); mass in proportion to
+  // their length
   const int n = static_cast<int>(doc.nodes.size());
   std::vector<std::vector<Vector3>> bones(n);
   for (int i = 1; i < n; ++i) bones[doc.nodes[i].parent].push_back(doc.nodes[i].offset * s);
@@ -172,10 +235,10 @@ std::shared_ptr<const Model> build_model(const BvhDocument& doc,
     LinkSpec l;
     l.name = link_name[i];
     l.parent = node.parent < 0 ? "" : link_name[node.parent];
-    l.joint.X_PJ = Transform::from_translation(node.offset * s);
+    l.joint.X_PJ = Transform::from_translation(joints.origin[i] * s);
     if (node.is_end_site()) {
       l.joint.type = JointType::kFixed;
-    } else if (node.parent < 0 || has_position(node)) {
+    } else if (node.parent < 0 || (has_position(node) && !joints.rotational[i])) {
       l.joint.type = JointType::kFree;
     } else {
       l.joint.type = JointType::kSpherical;  // also with fewer than 3 rotation channels, or none
@@ -279,6 +342,18 @@ const BvhLayout::Joint* BvhLayout::find(std::string_view name) const {
   return nullptr;
 }
 
+BvhTranslationJoints bvh_translation_joints(const Model& model, const BvhLayout& layout) {
+  BvhTranslationJoints out;
+  for (std::size_t k = 1; k < layout.joints.size(); ++k) {  // joints[0] is the ROOT
+    const BvhLayout::Joint& j = layout.joints[k];
+    if (std::all_of(j.channels.begin(), j.channels.end(), is_rotation)) continue;
+    const int link = model.link_index(j.name);
+    if (link < 1) continue;
+    (model.joint_type[link] == JointType::kFree ? out.translating : out.constant).push_back(j.name);
+  }
+  return out;
+}
+
 BvhImport import_bvh(const BvhDocument& doc,
                      const std::string& source_name,
                      const BvhImportOptions& options) {
@@ -304,8 +379,13 @@ BvhImport import_bvh(const BvhDocument& doc,
   out.height = extent.height * s;
   const double figure = extent.largest * s > kNoExtent ? extent.largest * s : 1.0;
   const std::vector<std::string> link_name = link_names(doc);
-  out.model = build_model(doc, source_name, link_name, s, figure, options.total_mass);
+  const JointOrigins joints =
+      joint_origins(doc, link_name, source_name, options.joint_types_of, s, figure);
+  out.model = build_model(doc, source_name, link_name, joints, s, figure, options.total_mass);
   import_motion(doc, link_name, s, options, out);
+  BvhTranslationJoints moved = bvh_translation_joints(*out.model, out.layout);
+  out.constant_translation_joints = std::move(moved.constant);
+  out.translating_joints = std::move(moved.translating);
   out.warnings = doc.warnings;
   return out;
 }

@@ -2,15 +2,23 @@
 //
 // The character becomes the BVH skeleton. The ROOT is a free joint; every other joint is
 // spherical (whatever rotation channels it has, even none), or free when it has position
-// channels. An End Site becomes a fixed link named "<joint>_end" (made unique with "_2", "_3", ...
-// when the name is taken). Link frames sit at the joints with the rest orientation the identity
-// (X_PJ = translation(OFFSET · scale)). Axes are kept: BVH is Y-up with characters facing +Z, as
-// pindrag is.
+// channels whose translation moves. A non-root joint whose translation (its OFFSET with the
+// position channels' values in place, io/bvh_document.hpp) stays within
+// kBvhConstantTranslationTolerance of the figure's size of one constant over every frame is
+// spherical too, with that constant (the midrange of each component) as its joint origin: exports
+// from MotionBuilder or Blender give every joint 6 channels whose positions only repeat the
+// OFFSET, and free joints there would let bones stretch when edited. The world poses stay those of
+// the file to within the deviation allowed (exactly, up to rounding, for constant values). A
+// document without frames keeps such joints free. An End Site becomes a fixed link named
+// "<joint>_end" (made unique with "_2", "_3", ... when the name is taken). Link frames sit at the
+// joints with the rest orientation the identity (X_PJ = translation(OFFSET · scale)). Axes are
+// kept: BVH is Y-up with characters facing +Z, as pindrag is.
 //
 // Masses: `total_mass` is split over the links in proportion to the length of the bones leaving
-// each joint (to its child joints and End Sites, at least 2% of the figure's size each), and each
-// bone is a capsule (radius 12% of its length, clamped to [1%, 5%] of the figure's size, along the
-// shortest arc from +Z to the bone) that gives the inertia and is added as collision geometry.
+// each joint (to the OFFSETs of its child joints and End Sites, at least 2% of the figure's size
+// each), and each bone is a capsule (radius 12% of its length, clamped to [1%, 5%] of the
+// figure's size, along the shortest arc from +Z to the bone) that gives the inertia and is added
+// as collision geometry.
 // Bones no longer than 1e-9 of the figure's size get no capsule; a joint without a longer one (a
 // leaf, for one) gets a sphere of radius 2% of the figure's size instead. The figure's size is the
 // largest extent of the rest skeleton in metres, or 1 m when that is under 1 µm (no extent). So
@@ -58,11 +66,24 @@ struct BvhLayout {
   const Joint* find(std::string_view name) const;
 };
 
+/// Largest deviation of a non-root joint's translation from one constant over all frames, as a
+/// fraction of the figure's size (the largest rest extent in metres, 1 m without one), under which
+/// its position channels count as constant (noise) and the joint imports as rotational: 1e-4, i.e.
+/// 0.17 mm on a 1.7 m figure. Float noise of exporters (float32: ~1e-7 of the figure, written
+/// with 6 decimals) is far below it; no visible or mocap-measurable motion (markers resolve
+/// ~0.1-1 mm) is; relative to the figure, so the choice does not depend on the unit.
+constexpr double kBvhConstantTranslationTolerance = 1e-4;
+
 struct BvhImportOptions {
   std::optional<double> scale;           // metres per file unit; empty: bvh_auto_scale
   double total_mass = 70.0;              // kg, split over the links by bone length
   std::function<void(double)> progress;  // fraction done in [0, 1], called a few dozen times
   ClipBudget budget;  // load_bvh_string and load_bvh_file refuse a longer clip (parse_bvh)
+  /// A clip loaded onto an existing character: a joint with position channels that this model
+  /// has (by link name) takes its joint type from it instead of from the frames: free stays free;
+  /// rotational is rotational, and a translation that moves more than the tolerance is then an
+  /// error naming the joint (the character cannot play it). Joints it lacks decide as usual.
+  const Model* joint_types_of = nullptr;
 };
 
 struct BvhImport {
@@ -72,8 +93,21 @@ struct BvhImport {
   std::string unit;   // "centimetres", ..., or "option" when BvhImportOptions::scale is set
   double height = 0;  // rest height, metres
   std::vector<int> node_link;  // model link of every BVH node in file order (End Sites too)
+  /// Non-root joints with position channels (file order): constant translation, imported as
+  /// rotational joints at that offset, and truly translating ones, imported free.
+  std::vector<std::string> constant_translation_joints;
+  std::vector<std::string> translating_joints;
   std::vector<std::string> warnings;
 };
+
+/// The non-root joints of `layout` that have position channels, split by the joint `model` gives
+/// them: `constant` (imported rotational at a constant offset) and `translating` (free); file
+/// order. For a model and layout from import_bvh, the lists BvhImport holds.
+struct BvhTranslationJoints {
+  std::vector<std::string> constant;
+  std::vector<std::string> translating;
+};
+BvhTranslationJoints bvh_translation_joints(const Model& model, const BvhLayout& layout);
 
 /// Imports a parsed document. `source_name` starts every message.
 /// @throws ModelError naming the source and the rule broken

@@ -113,9 +113,13 @@ bool same_skeleton(const core::Model& a, const core::Model& b) {
          a.joint_type == b.joint_type && a.parent == b.parent;
 }
 
-io::BvhImport load_bvh(const std::string& path, const animator::Limits& limits) {
+// `character`: the model a clip is loaded onto, whose joint types the clip's joints follow
+io::BvhImport load_bvh(const std::string& path,
+                       const animator::Limits& limits,
+                       const core::Model* character = nullptr) {
   io::BvhImportOptions options;
   options.budget = animator::clip_budget(limits);
+  options.joint_types_of = character;
   return io::load_bvh_file(path, options);
 }
 
@@ -202,7 +206,7 @@ core::Clip clip_from_upload(const std::string& field,
   core::Clip clip;
   try {
     if (ext == ".bvh") {
-      io::BvhImport imported = load_bvh(upload.file(), rules.limits);
+      io::BvhImport imported = load_bvh(upload.file(), rules.limits, &model);
       clip_model = imported.model;
       clip = std::move(imported.clip);
     } else {

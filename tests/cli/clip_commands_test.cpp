@@ -15,35 +15,18 @@
 #include "core/kinematics.hpp"
 #include "io/bvh.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/fixtures/run_pindrag.hpp"
 #include "tests/io/gltf_reader.hpp"
 
 namespace {
 
 using nlohmann::json;
 
-struct Outcome {
-  int status = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fixtures::Outcome;
 
 // runs `pindrag <args>` with stdout and stderr captured in files of `dir`
 Outcome pindrag(const gltf_test::TempDir& dir, const std::string& args) {
-  const std::string out = dir.path("stdout.txt"), err = dir.path("stderr.txt");
-  const std::string cmd =
-      std::string(PINDRAG_EXE) + " " + args + " >" + out + " 2>" + err + " </dev/null";
-  const int raw = std::system(cmd.c_str());
-  Outcome r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
+  return fixtures::run_pindrag(PINDRAG_EXE, dir.path(""), args);
 }
 
 std::string walk() { return fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh"; }
@@ -61,7 +44,9 @@ Positions joint_positions(const io::BvhDocument& doc, double scale) {
   return p;
 }
 
-io::BvhDocument read_bvh(const std::string& path) { return io::parse_bvh(slurp(path), path); }
+io::BvhDocument read_bvh(const std::string& path) {
+  return io::parse_bvh(fixtures::slurp(path), path);
+}
 
 TEST(ConvertCommand, BvhToGlbAndBackKeepsEveryJointsWorldPositions) {
   PINDRAG_REQUIRE_DATA_DIR();
