@@ -329,7 +329,8 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
               /*edit=*/true);
           send_json(res, 200, answer);
         } catch (const UploadError& e) {
-          send_error(res, e.status, e.what());
+          if (e.code.empty()) return send_error(res, e.status, e.what());
+          send_json(res, e.status, {{"error", e.what()}, {"code", e.code}});
         }
       });
   http.Get(R"(/api/sessions/([^/]+)/export)", [&ctx](const httplib::Request& req,

@@ -222,11 +222,12 @@ core::Clip clip_from_upload(const std::string& field,
     throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
   }
   if (!same_skeleton(*clip_model, model)) {
-    throw UploadError(422, field + ": \"" + shown + "\": its skeleton (" +
-                               std::to_string(clip_model->nlinks()) +
-                               " links) does not match the session's character (" +
-                               std::to_string(model.nlinks()) +
-                               " links; rule: same link names, parents and joint types)");
+    throw UploadError(
+        422,
+        field + ": \"" + shown + "\": its skeleton (" + std::to_string(clip_model->nlinks()) +
+            " links) does not match the session's character (" + std::to_string(model.nlinks()) +
+            " links; rule: same link names, parents and joint types)",
+        "skeleton_differs");
   }
   return clip;
 }

@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "animator/session.hpp"
 #include "core/clip.hpp"
@@ -41,9 +42,11 @@ std::string byte_text(std::size_t bytes);
 /// A file the server will not take; what() names the field and the rule. Maps to 4xx.
 class UploadError : public std::runtime_error {
  public:
-  UploadError(int http_status, const std::string& message)
-      : std::runtime_error(message), status(http_status) {}
+  UploadError(int http_status, const std::string& message, std::string error_code = {})
+      : std::runtime_error(message), status(http_status), code(std::move(error_code)) {}
   int status;
+  /// Machine-readable kind for the page to act on ("skeleton_differs"); empty for most errors.
+  std::string code;
 };
 
 /// A new session named `name` from a character file on disk chosen by the operator (by

@@ -3,13 +3,24 @@
 // (X-Session-Token); creating and listing carry the server key when the server asks for one.
 
 async function errorText(res) {
+  return (await failure('', res)).message;
+}
+
+/** An Error "<what>: <status>: <message>" that keeps the server's machine-readable `code`. */
+async function failure(what, res) {
+  let text = `${res.status} ${res.statusText}`;
+  let code = null;
   try {
     const body = await res.json();
-    if (body && body.error) return `${res.status}: ${body.error}`;
+    if (body && body.error) text = `${res.status}: ${body.error}`;
+    if (body && body.code) code = body.code;
   } catch {
     /* not JSON */
   }
-  return `${res.status} ${res.statusText}`;
+  const err = new Error(what ? `${what}: ${text}` : text);
+  err.code = code;
+  err.status = res.status;
+  return err;
 }
 
 export function createApi() {
@@ -36,6 +47,22 @@ export function createApi() {
         body: JSON.stringify({ character }),
       });
       if (!res.ok) throw new Error(`POST /api/sessions: ${await errorText(res)}`);
+      return res.json();
+    },
+
+    /** A new session on a character file (URDF, JSON, BVH, glTF/GLB, FBX, DAE): {id, token}. */
+    async createSessionFromFile(file) {
+      const form = new FormData();
+      form.append('character', file, file.name);
+      const res = await fetch('/api/sessions', { method: 'POST', headers: api.keyHeaders(), body: form });
+      if (!res.ok) throw await failure(`open ${file.name}`, res);
+      return res.json();
+    },
+
+    /** The characters a session can be created on by name: [{name, description}]. */
+    async listCharacters() {
+      const res = await fetch('/api/characters', { cache: 'no-store' });
+      if (!res.ok) throw new Error(`GET /api/characters: ${await errorText(res)}`);
       return res.json();
     },
 
@@ -77,7 +104,7 @@ export function createApi() {
         headers: api.headers(),
         body: form,
       });
-      if (!res.ok) throw new Error(`clip upload: ${await errorText(res)}`);
+      if (!res.ok) throw await failure('clip upload', res);
       return res.json();
     },
 

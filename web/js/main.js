@@ -26,6 +26,7 @@ import { rememberSession } from './known_sessions.js';
 import { createViewOptions } from './panel_view_options.js';
 import { createCameraFollow } from './camera_follow.js';
 import { bindKeyboard } from './keyboard.js';
+import { createOpenDialog } from './panel_open.js';
 
 const SESSION_STORAGE_KEY = 'pindrag.session';
 const SERVER_KEY_STORAGE_KEY = 'pindrag.key';
@@ -99,7 +100,8 @@ async function main() {
   frameEachNewCharacter(state, viewport, skeleton);
   createPhysicsView(state, viewport, document.getElementById('stage'));
 
-  document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions));
+  const openDialog = createOpenDialog(state, api, switchSession);
+  document.getElementById('toolbar').appendChild(createToolbar(state, api, connection, actions, openDialog));
   document.getElementById('timeline').appendChild(createTimelinePanel(state, connection, actions));
   const sidebar = document.getElementById('sidebar');
   sidebar.append(
@@ -111,6 +113,7 @@ async function main() {
     createSessionsPanel(state, api, switchSession),
   );
   document.getElementById('stage').append(createViewOptions(state, viewport), createToasts(state), createHelpOverlay(state));
+  document.body.append(openDialog.overlay);
   bindKeyboard(state, actions, drag, viewport, skeleton);
 
   showCharacterInTitle(state);

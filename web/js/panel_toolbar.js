@@ -1,5 +1,5 @@
-// The top bar: the character, undo/redo, pin mode, gizmo mode, clip upload, export buttons and the
-// connection badge.
+// The top bar: the character, Open…, undo/redo, pin mode, gizmo mode, clip upload, export buttons
+// and the connection badge.
 
 import { h } from './panel_util.js';
 import { PIN_MODES, EXPORT_FORMATS } from './protocol.js';
@@ -16,7 +16,7 @@ function segmented(name, options, current, onPick) {
   return { root, select };
 }
 
-export function createToolbar(state, api, connection, actions) {
+export function createToolbar(state, api, connection, actions, openDialog) {
   const { signals } = state;
 
   const characterName = h('span.character-name', {}, '…');
@@ -61,7 +61,8 @@ export function createToolbar(state, api, connection, actions) {
       const r = await api.uploadClip(file);
       signals.notify.dispatch({ text: `${file.name}: ${r.frames} frames at ${(1 / r.frame_time).toFixed(1)} fps`, kind: 'info' });
     } catch (err) {
-      signals.notify.dispatch({ text: err.message, kind: 'error' });
+      if (err.code === 'skeleton_differs') openDialog.offerOwnCharacter(file, err.message);
+      else signals.notify.dispatch({ text: err.message, kind: 'error' });
     } finally {
       uploadButton.disabled = false;
     }
@@ -126,7 +127,7 @@ export function createToolbar(state, api, connection, actions) {
     h('div.group', {}, h('span.group-label', {}, 'Pin'), pinMode.root),
     h('div.group', {}, h('span.group-label', {}, 'Gizmo'), gizmoMode.root),
     h('div.spacer'),
-    h('div.group', {}, uploadButton, fileInput),
+    h('div.group', {}, openDialog.button, uploadButton, fileInput),
     h('div.group', {}, h('span.group-label', {}, 'Export'), exportButtons),
     notSaved,
     badge,

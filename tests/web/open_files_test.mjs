@@ -1,0 +1,187 @@
+// Opening characters and clips from the page with `pindrag serve` in headless Chromium: "Open…"
+// opens a bundled character, a character file of the user's and a saved session, each in a new
+// session while the one left stays saved; "Load clip…" with a clip of another skeleton offers to
+// open it as its own character, which brings the clip; a malformed file is refused with a message
+// naming it and the session stays as it was. Every file of ../shared/data/{bvh,gltf,urdf} opens
+// as a session. Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
+
+import { test, before } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import path from 'node:path';
+import { settle } from './support/browser.mjs';
+import { serverAndBrowser } from './support/fixture.mjs';
+import { SOURCE_DIR } from './support/env.mjs';
+
+const fixture = await serverAndBrowser('open_files');
+const out = fixture.out;
+
+let browser;
+let server;
+before(async () => ({ server, browser } = await fixture.start()));
+
+const DATA_DIR = process.env.PINDRAG_DATA_DIR || path.join(SOURCE_DIR, '..', 'shared', 'data');
+const hasData = fs.existsSync(path.join(DATA_DIR, 'bvh'));
+const noData = hasData ? false : `${DATA_DIR} is absent (set PINDRAG_DATA_DIR)`;
+
+async function ready(page) {
+  await page.waitForFunction(() => window.pindrag && window.pindrag.connection === 'open' && window.pindrag.poseFrames > 0, null, {
+    timeout: 30000,
+  });
+  await settle(page);
+}
+
+async function openTab(context) {
+  const page = await context.newPage();
+  const problems = [];
+  page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  await page.goto(server.url);
+  await ready(page);
+  return { page, problems };
+}
+
+const sessionOf = (page) => page.evaluate(() => ({ id: window.pindrag.sessionId, token: window.pindrag.token }));
+
+/** Waits until the tab has switched to another session than `from` and is live on it. */
+async function switchedFrom(page, from) {
+  await page.waitForFunction((id) => window.pindrag && window.pindrag.sessionId && window.pindrag.sessionId !== id, from, { timeout: 60000 });
+  await ready(page);
+  const s = await sessionOf(page);
+  return { ...s, snapshot: await server.snapshot(s.id, s.token) };
+}
+
+const storedIds = async () => (await (await fetch(`${server.url}api/sessions`)).json()).map((r) => r.id);
+
+test('Open… opens a bundled character, a file of one’s own and a saved session, keeping the one left', async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const first = await sessionOf(page);
+  const firstSnapshot = await server.snapshot(first.id, first.token);
+  assert.equal(firstSnapshot.character.name, 'human48');
+
+  // a bundled character
+  await page.click('#open-character');
+  await page.waitForSelector('#open-dialog:not([hidden]) .open-characters li[data-name="human34"] button');
+  const listed = await page.$$eval('.open-characters li[data-name]', (lis) => lis.map((li) => li.dataset.name));
+  console.log(`bundled characters listed: ${listed.join(', ')}`);
+  assert.ok(listed.includes('human48') && listed.includes('human34'), `listed: ${listed}`);
+  await page.screenshot({ path: path.join(out, 'open-dialog.png') });
+  await page.click('.open-characters li[data-name="human34"] button');
+  const second = await switchedFrom(page, first.id);
+  assert.equal(second.snapshot.character.name, 'human34');
+  assert.notEqual(second.snapshot.q.length, firstSnapshot.q.length);
+  assert.ok((await storedIds()).includes(first.id), 'the session left is still saved');
+  // the one left is as it was
+  assert.deepEqual((await server.snapshot(first.id, first.token)).q, firstSnapshot.q);
+
+  // a character file of one's own (a pindrag JSON figure written here)
+  const file = path.join(out, 'two-links.json');
+  fs.writeFileSync(
+    file,
+    JSON.stringify({
+      format: 'pindrag-character',
+      version: 1,
+      name: 'two-links',
+      links: [
+        { name: 'base', joint: { type: 'free', origin: { xyz: [0, 1, 0] } }, inertial: { mass: 5, com: [0, 0, 0], inertia: { ixx: 0.1, iyy: 0.1, izz: 0.1 } } },
+        {
+          name: 'arm',
+          parent: 'base',
+          joint: { name: 'shoulder', type: 'revolute', origin: { xyz: [0, 0.3, 0] }, axis: [1, 0, 0], limits: { lower: -1, upper: 1 } },
+          inertial: { mass: 1, com: [0, 0.2, 0], inertia: { ixx: 0.01, iyy: 0.01, izz: 0.01 } },
+        },
+      ],
+    }),
+  );
+  await page.click('#open-character');
+  await page.waitForSelector('#open-dialog:not([hidden]) #open-file');
+  await page.setInputFiles('#open-character-file', file);
+  const third = await switchedFrom(page, second.id);
+  assert.deepEqual(
+    third.snapshot.character.links.map((l) => l.name),
+    ['base', 'arm'],
+  );
+
+  // a saved session: back to the first, which is listed with its character
+  await page.click('#open-character');
+  await page.waitForSelector(`#open-dialog:not([hidden]) .open-sessions li[data-id="${first.id}"] button`);
+  await page.click(`.open-sessions li[data-id="${first.id}"] button`);
+  const back = await switchedFrom(page, third.id);
+  assert.equal(back.id, first.id);
+  assert.deepEqual(back.snapshot.q, firstSnapshot.q);
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a malformed character file is refused naming the file; the session stays', async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  const snapshot = await server.snapshot(before.id, before.token);
+  const file = path.join(out, 'broken.bvh');
+  fs.writeFileSync(file, 'HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n');
+  const storedBefore = await storedIds();
+  await page.click('#open-character');
+  await page.waitForSelector('#open-dialog:not([hidden]) #open-file');
+  await page.setInputFiles('#open-character-file', file);
+  await page.waitForFunction(() => /422/.test(document.querySelector('#open-dialog .open-status')?.textContent || ''), null, {
+    timeout: 20000,
+  });
+  const message = await page.$eval('#open-dialog .open-status', (e) => e.textContent);
+  console.log(`malformed file: "${message}"`);
+  assert.match(message, /422/);
+  assert.match(message, /broken\.bvh/);
+  assert.equal((await sessionOf(page)).id, before.id);
+  assert.deepEqual((await server.snapshot(before.id, before.token)).q, snapshot.q);
+  assert.deepEqual((await storedIds()).sort(), storedBefore.sort(), 'no session was made');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Load clip with another skeleton offers to open it as its own character, clip and all', { skip: noData }, async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  const clip = path.join(DATA_DIR, 'bvh', 'cmu_walk_cgspeed.bvh');
+  await page.setInputFiles('#clip-file', clip);
+  await page.waitForSelector('#open-dialog:not([hidden]) #open-as-own', { timeout: 30000 });
+  const text = await page.$eval('#open-dialog', (e) => e.textContent);
+  assert.match(text, /cmu_walk_cgspeed\.bvh animates a skeleton that differs from human48/);
+  await page.screenshot({ path: path.join(out, 'another-skeleton.png') });
+  await page.click('#open-as-own');
+  const opened = await switchedFrom(page, before.id);
+  const links = opened.snapshot.character.links.map((l) => l.name);
+  console.log(`opened as its own character: ${links.length} links, clip of ${opened.snapshot.clip?.frames} frames`);
+  assert.ok(links.includes('Hips') || links.includes('hip'), `links: ${links.slice(0, 5)}`);
+  assert.ok(opened.snapshot.clip && opened.snapshot.clip.frames > 100, 'the clip came with it');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('every file of the shared bvh, gltf and urdf folders opens as a session', { skip: noData }, async () => {
+  const files = [];
+  for (const dir of ['bvh', 'gltf', 'urdf']) {
+    const walk = (d) => {
+      for (const e of fs.readdirSync(d, { withFileTypes: true })) {
+        const p = path.join(d, e.name);
+        if (e.isDirectory()) {
+          if (e.name !== 'meshes') walk(p); // a robot's visual meshes are parts, not characters
+        }
+        else if (/\.(bvh|glb|gltf|fbx|dae|urdf)$/i.test(e.name)) files.push(p);
+      }
+    };
+    walk(path.join(DATA_DIR, dir));
+  }
+  assert.ok(files.length >= 10, `found ${files.length} files`);
+  for (const file of files) {
+    const form = new FormData();
+    form.append('character', new Blob([fs.readFileSync(file)]), path.basename(file));
+    const res = await fetch(`${server.url}api/sessions`, { method: 'POST', body: form });
+    const body = await res.text();
+    assert.equal(res.status, 201, `${path.relative(DATA_DIR, file)}: ${res.status} ${body}`);
+    const { id, token } = JSON.parse(body);
+    const s = await server.snapshot(id, token);
+    console.log(`${path.relative(DATA_DIR, file)}: ${s.character.links.length} links, clip ${s.clip ? s.clip.frames : 0} frames`);
+    assert.ok(s.character.links.length >= 2, `${file}: ${s.character.links.length} links`);
+  }
+});
