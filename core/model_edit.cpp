@@ -1,5 +1,11 @@
 #include "core/model_edit.hpp"
 
+#include <cmath>
+
+#include "core/bounds.hpp"
+#include "core/configuration.hpp"
+#include "core/kinematics.hpp"
+
 namespace core {
 
 ModelBuilder to_builder(const Model& model) {
@@ -42,6 +48,32 @@ std::shared_ptr<const Model> weld_root(const std::shared_ptr<const Model>& model
   root.range = SphericalRange{};
   root.standard_orientation = Quaternion::Identity();
   return b.finalize();
+}
+
+Grounded stand_on_ground(const std::shared_ptr<const Model>& model) {
+  Grounded out{model, 0.0, false};
+  if (model->njoints < 2) return out;
+  Data data(*model);
+  forward_kinematics(*model, data, rest_configuration(*model));
+  const Bounds b = world_bounds(*model, data);
+  if (b.empty() || !(b.size().y() > 0) || !std::isfinite(b.min.y())) return out;
+  const double root_height = data.X_W[1].p.y();
+  // a figure reaching far below its root stands on its limbs
+  const bool legged = root_height - b.min.y() > 0.25 * b.size().y();
+  const bool float_root = legged && model->joint_type[1] == JointType::kFixed;
+  // already standing (to rounding: a placed figure placed again is itself)
+  if (std::abs(b.min.y()) <= 1e-12 * b.size().y() && !float_root) return out;
+  ModelBuilder builder = to_builder(*model);
+  JointSpec& root = builder.link(0).joint;
+  root.X_PJ.p.y() -= b.min.y();
+  if (float_root) {
+    root.type = JointType::kFree;
+    root.limits = JointLimits{};
+  }
+  out.model = builder.finalize();
+  out.lift = -b.min.y();
+  out.floated = float_root;
+  return out;
 }
 
 }  // namespace core

@@ -20,4 +20,19 @@ ModelBuilder to_builder(const Model& model);
 /// is already fixed.
 std::shared_ptr<const Model> weld_root(const std::shared_ptr<const Model>& model);
 
+/// A character file placed as a figure stands in the page (the root's placement is the file's
+/// own choice, and robot descriptions put it at the world origin with the legs below the floor).
+struct Grounded {
+  std::shared_ptr<const Model> model;
+  double lift = 0;       // metres the root's placement moved up (down when negative)
+  bool floated = false;  // the fixed root became free
+};
+
+/// Places `model` on the ground: its root joint's placement X_PJ moves vertically so the lowest
+/// point of world_bounds in the pose where posing starts (rest_configuration) is at y = 0. A fixed
+/// root under which the figure reaches more than a quarter of its height (a legged figure: it
+/// stands on its limbs, not on its root, unlike an arm bolted at its base) becomes free, so the
+/// whole figure can be posed and pinned by its feet. A model without extent is returned as it is.
+Grounded stand_on_ground(const std::shared_ptr<const Model>& model);
+
 }  // namespace core

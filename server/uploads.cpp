@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <system_error>
 
+#include "core/model_edit.hpp"
 #include "io/assimp_import.hpp"
 #include "io/bvh.hpp"
 #include "io/model_file.hpp"
@@ -161,7 +162,11 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
     }
     return session;
   }
-  auto session = std::make_unique<animator::Session>(io::load_model_file(path).model, name);
+  std::shared_ptr<const core::Model> model = io::load_model_file(path).model;
+  // a robot description puts its root at the world origin: stand it on the ground (legged ones
+  // on a free root)
+  if (ext == ".urdf") model = core::stand_on_ground(model).model;
+  auto session = std::make_unique<animator::Session>(std::move(model), name);
   session->set_limits(limits);
   return session;
 }
