@@ -12,6 +12,7 @@
 #include "io/bundled_characters.hpp"
 #include "io/bvh.hpp"
 #include "io/gltf.hpp"
+#include "server/mesh_binary.hpp"
 #include "server/protocol.hpp"
 #include "server/uploads.hpp"
 #if PINDRAG_HAVE_THUMBNAIL
@@ -310,6 +311,27 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
                 return snapshot_json(s, id);
               }));
   });
+  // the skinned mesh, once per session: it never changes, so the browser keeps it (ETag)
+  http.Get(
+      R"(/api/sessions/([^/]+)/mesh)", [&ctx](const httplib::Request& req, httplib::Response& res) {
+        const auto actor = session_of(ctx, req, res);
+        if (!actor) return;
+        const auto bytes = actor->call_within(ctx.call_timeout, [](animator::Session& s) {
+          return s.skin() ? std::make_shared<std::string>(encode_mesh_binary(*s.skin()))
+                          : std::shared_ptr<std::string>();
+        });
+        if (!bytes)
+          return send_error(res, 404, "mesh: this session's character has no skinned mesh");
+        const std::string etag = "\"" + actor->id() + "-" + std::to_string(bytes->size()) + "\"";
+        res.set_header("ETag", etag);
+        res.set_header("Cache-Control", "private, no-cache");
+        if (req.get_header_value("If-None-Match") == etag) {
+          res.status = 304;
+          return;
+        }
+        res.status = 200;
+        res.set_content(*bytes, "application/octet-stream");
+      });
   http.Post(
       R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
         const auto actor = session_of(ctx, req, res);

@@ -96,6 +96,13 @@ export function createApi() {
       return res.json();
     },
 
+    /** The session's skinned mesh as an ArrayBuffer (server/mesh_binary.hpp); the browser caches it. */
+    async mesh() {
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/mesh`, { headers: api.headers() });
+      if (!res.ok) throw await failure('mesh', res);
+      return res.arrayBuffer();
+    },
+
     async uploadClip(file) {
       const form = new FormData();
       form.append('clip', file, file.name);

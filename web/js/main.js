@@ -2,6 +2,7 @@
 // connects the WebSocket. Also exposes `window.pindrag`, a small read-only handle that the browser
 // tests (and curious users in the console) use to find the session and where links are on screen.
 
+import * as THREE from 'three';
 import { createState, linkLabel } from './state.js';
 import { createApi } from './api.js';
 import { createConnection } from './connection.js';
@@ -27,6 +28,7 @@ import { createViewOptions } from './panel_view_options.js';
 import { createCameraFollow } from './camera_follow.js';
 import { bindKeyboard } from './keyboard.js';
 import { createOpenDialog } from './panel_open.js';
+import { createSkinnedView } from './skinned_view.js';
 
 const SESSION_STORAGE_KEY = 'pindrag.session';
 const SERVER_KEY_STORAGE_KEY = 'pindrag.key';
@@ -96,6 +98,7 @@ async function main() {
   createLimitsView(state, viewport, skeleton);
   const pins = createPinsView(state, viewport, skeleton, connection);
   const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
+  const skinned = createSkinnedView(state, viewport, skeleton, api);
   createCameraFollow(state, viewport, skeleton);
   frameEachNewCharacter(state, viewport, skeleton);
   createPhysicsView(state, viewport, document.getElementById('stage'));
@@ -170,12 +173,59 @@ async function main() {
       const w = i === undefined ? null : skeleton.linkWorld(i);
       return w ? w.position.toArray() : null;
     },
+    /** World pose of a link as drawn now: {p: [x,y,z], q: [x,y,z,w]} (null: no such link). */
+    linkPose(name) {
+      const i = state.linkIndex.get(name);
+      const w = i === undefined ? null : skeleton.linkWorld(i);
+      return w ? { p: w.position.toArray(), q: w.quaternion.toArray() } : null;
+    },
     camera: () => ({
       position: viewport.camera.position.toArray(),
       target: viewport.controls.target.toArray(),
       quaternion: viewport.camera.quaternion.toArray(),
     }),
     contextLost: () => viewport.renderer.getContext().isContextLost(),
+    /** The skinned mesh drawn now: {vertices, visible} (null: none). */
+    mesh() {
+      const m = skinned.object();
+      return m ? { vertices: m.geometry.attributes.position.count, visible: m.visible } : null;
+    },
+    /** World position of skinned vertex i as drawn now (linear blend skinning by three.js). */
+    skinnedVertex(i) {
+      const m = skinned.object();
+      if (!m) return null;
+      return m.getVertexPosition(i, new THREE.Vector3()).applyMatrix4(m.matrixWorld).toArray();
+    },
+    /** The vertex weighted most to a link's bone: {index, weight} (null: the link has no bone). */
+    vertexOfLink(name) {
+      const m = skinned.object();
+      const link = state.linkIndex.get(name);
+      if (!m || link === undefined) return null;
+      const bone = m.skeleton.bones.findIndex((b) => b.userData.link === link);
+      if (bone < 0) return null;
+      const idx = m.geometry.attributes.skinIndex;
+      const w = m.geometry.attributes.skinWeight;
+      let best = { index: -1, weight: 0 };
+      for (let v = 0; v < idx.count; v++) {
+        for (let k = 0; k < 4; k++) {
+          if (idx.getComponent(v, k) === bone && w.getComponent(v, k) > best.weight) best = { index: v, weight: w.getComponent(v, k) };
+        }
+      }
+      return best;
+    },
+    /** The colour [r, g, b] (0-255) drawn at a client point, from a fresh render. */
+    pixelAt(x, y) {
+      const r = viewport.renderer;
+      r.render(viewport.scene, viewport.camera);
+      const rect = r.domElement.getBoundingClientRect();
+      const ratio = r.getPixelRatio();
+      const px = Math.round((x - rect.left) * ratio);
+      const py = Math.round(r.domElement.height - (y - rect.top) * ratio);
+      const out = new Uint8Array(4);
+      const gl = r.getContext();
+      gl.readPixels(px, py, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, out);
+      return [out[0], out[1], out[2]];
+    },
     label: (i) => linkLabel(state, i),
   };
 }

@@ -203,6 +203,10 @@ export function createSkeletonView(state, viewport) {
   const tmp = new THREE.Vector3();
   return {
     pickables,
+    /** Draws the solids or not (a skinned mesh stands in for them); they stay pick targets. */
+    setBodyVisible(visible) {
+      for (const l of links) for (const m of l.meshes) m.visible = visible;
+    },
     /** World pose of link i: {position, quaternion} (live objects: do not modify). */
     linkWorld(i) {
       const l = links[i];

@@ -1,0 +1,23 @@
+// The skinned mesh of a session as one binary download for the page (GET
+// /api/sessions/{id}/mesh; docs/protocol.md): "PDMS", a little-endian uint32 header length, the
+// header (JSON, padded with spaces to 4 bytes), then the arrays, each 4-byte aligned:
+//   positions  float32 × 3 per vertex (bind pose, world frame)
+//   normals    float32 × 3 per vertex (absent when the header says "normals": false)
+//   indices    uint32 × 3 per triangle
+//   joints     uint16 × 4 per vertex (indices into the header's "bones"), padded to 4 bytes
+//   weights    float32 × 4 per vertex
+// The header: {"name", "vertices", "triangles", "normals": bool, "bones": [link index of each skin
+// joint in the snapshot's character.links], "inverse_bind": [[16 numbers, column-major] per
+// bone], "base_color": [r, g, b, a]}.
+#pragma once
+
+#include <string>
+
+#include "core/skin.hpp"
+
+namespace server {
+
+/// The bytes of `mesh` in the format above.
+std::string encode_mesh_binary(const core::SkinnedMesh& mesh);
+
+}  // namespace server
