@@ -1,8 +1,13 @@
 #include "server/mesh_binary.hpp"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <vector>
 
 namespace server {
 namespace {
@@ -77,6 +82,143 @@ std::string encode_mesh_binary(const core::SkinnedMesh& mesh) {
   for (const auto& w : mesh.weights) floats.insert(floats.end(), w.begin(), w.end());
   append(out, floats.data(), floats.size());
   return out;
+}
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& source, const std::string& what) {
+  throw std::runtime_error(source + ": " + what);
+}
+
+// Reads the arrays in order, each 4-byte aligned, never past the end.
+class Reader {
+ public:
+  Reader(const std::string& bytes, std::size_t at, const std::string& source)
+      : bytes_(bytes), at_(at), source_(source) {}
+
+  template <typename T>
+  std::vector<T> take(std::size_t count, const char* field) {
+    const std::size_t size = sizeof(T) * count;
+    if (count > bytes_.size() / sizeof(T) || size > bytes_.size() - at_) {
+      refuse(source_, std::string(field) + ": " + std::to_string(count) +
+                          " values run past the end of the file (rule: the header's counts)");
+    }
+    std::vector<T> out(count);
+    if (size) std::memcpy(out.data(), bytes_.data() + at_, size);
+    at_ = std::min(bytes_.size(), at_ + (size + 3) / 4 * 4);
+    return out;
+  }
+
+ private:
+  const std::string& bytes_;
+  std::size_t at_;
+  const std::string& source_;
+};
+
+template <typename T>
+void check_finite(const std::vector<T>& values, const std::string& source, const char* field) {
+  for (T v : values) {
+    if (!std::isfinite(v)) refuse(source, std::string(field) + ": a value is not finite");
+  }
+}
+
+}  // namespace
+
+core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
+                                     int nlinks,
+                                     const std::string& source) {
+  if (bytes.size() < 8 || bytes.compare(0, 4, "PDMS") != 0) {
+    refuse(source, "not a pindrag mesh (rule: it starts with PDMS and a header length)");
+  }
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 4, 4);
+  if (length > bytes.size() - 8) refuse(source, "header: longer than the file");
+  const nlohmann::json h = nlohmann::json::parse(bytes.substr(8, length), nullptr, false);
+  if (h.is_discarded() || !h.is_object()) refuse(source, "header: not a JSON object");
+  const auto count = [&](const char* field) -> std::size_t {
+    const auto it = h.find(field);
+    if (it == h.end() || !it->is_number_unsigned()) {
+      refuse(source, std::string(field) + ": a count (rule: a non-negative integer)");
+    }
+    return it->get<std::size_t>();
+  };
+  const std::size_t n = count("vertices"), t = count("triangles");
+  if (!h.contains("normals") || !h["normals"].is_boolean()) refuse(source, "normals: not a bool");
+  if (!h.contains("bones") || !h["bones"].is_array()) refuse(source, "bones: not an array");
+  if (!h.contains("inverse_bind") || !h["inverse_bind"].is_array() ||
+      h["inverse_bind"].size() != h["bones"].size()) {
+    refuse(source, "inverse_bind: not one matrix per bone");
+  }
+  core::SkinnedMesh mesh;
+  if (h.contains("name") && h["name"].is_string()) mesh.name = h["name"];
+  for (const auto& b : h["bones"]) {
+    if (!b.is_number_integer() || b.get<long long>() < 0 || b.get<long long>() + 1 >= nlinks) {
+      refuse(source, "bones: a link index outside the character (rule: 0 to " +
+                         std::to_string(nlinks - 2) + ")");
+    }
+    mesh.bones.push_back(b.get<int>() + 1);
+  }
+  for (const auto& m : h["inverse_bind"]) {
+    if (!m.is_array() || m.size() != 16) refuse(source, "inverse_bind: a matrix of 16 numbers");
+    double a[16];
+    for (int k = 0; k < 16; ++k) {
+      if (!m[k].is_number() || !std::isfinite(m[k].get<double>())) {
+        refuse(source, "inverse_bind: a value is not a finite number");
+      }
+      a[k] = m[k].get<double>();
+    }
+    core::Transform X;
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) X.R(r, c) = a[4 * c + r];
+    }
+    X.p = core::Vector3(a[12], a[13], a[14]);
+    mesh.inverse_bind.push_back(X);
+  }
+  if (h.contains("base_color") && h["base_color"].is_array() && h["base_color"].size() == 4) {
+    for (int k = 0; k < 4; ++k) {
+      if (h["base_color"][k].is_number()) mesh.base_color[k] = h["base_color"][k].get<float>();
+    }
+  }
+  Reader in(bytes, 8 + std::size_t{length}, source);
+  const std::vector<float> positions = in.take<float>(3 * n, "positions");
+  check_finite(positions, source, "positions");
+  for (std::size_t v = 0; v < n; ++v) {
+    mesh.positions.emplace_back(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+  }
+  if (h["normals"].get<bool>()) {
+    const std::vector<float> normals = in.take<float>(3 * n, "normals");
+    check_finite(normals, source, "normals");
+    for (std::size_t v = 0; v < n; ++v) {
+      mesh.normals.emplace_back(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+    }
+  }
+  const std::vector<std::uint32_t> indices = in.take<std::uint32_t>(3 * t, "indices");
+  for (std::size_t k = 0; k < t; ++k) {
+    std::array<int, 3> tri;
+    for (int c = 0; c < 3; ++c) {
+      if (indices[3 * k + c] >= n) refuse(source, "indices: a vertex index beyond the vertices");
+      tri[c] = static_cast<int>(indices[3 * k + c]);
+    }
+    mesh.triangles.push_back(tri);
+  }
+  const std::vector<std::uint16_t> joints = in.take<std::uint16_t>(4 * n, "joints");
+  const std::vector<float> weights = in.take<float>(4 * n, "weights");
+  check_finite(weights, source, "weights");
+  for (std::size_t v = 0; v < n; ++v) {
+    std::array<int, 4> j;
+    std::array<float, 4> w;
+    for (int c = 0; c < 4; ++c) {
+      j[c] = joints[4 * v + c];
+      w[c] = weights[4 * v + c];
+      if (static_cast<std::size_t>(j[c]) >= mesh.bones.size()) {
+        if (w[c] != 0) refuse(source, "joints: a bone index beyond the bones");
+        j[c] = 0;  // an unused slot
+      }
+    }
+    mesh.joints.push_back(j);
+    mesh.weights.push_back(w);
+  }
+  return mesh;
 }
 
 }  // namespace server

@@ -20,4 +20,12 @@ namespace server {
 /// The bytes of `mesh` in the format above.
 std::string encode_mesh_binary(const core::SkinnedMesh& mesh);
 
+/// The mesh back from those bytes (a session keeps its mesh in <id>.mesh in this format), bound
+/// to a character of `nlinks` links (the world included). Every count, index and number is
+/// checked before use.
+/// @throws std::runtime_error naming `source`, the field and the rule broken
+core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
+                                     int nlinks,
+                                     const std::string& source);
+
 }  // namespace server

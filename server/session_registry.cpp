@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
+#include <optional>
 #include <system_error>
 
 #include "animator/session_file.hpp"
+#include "server/mesh_binary.hpp"
 #include "server/security.hpp"
 
 namespace server {
@@ -58,6 +60,19 @@ int SessionRegistry::restore(std::ostream& log) {
   return indexed - expired;
 }
 
+// The skinned mesh kept beside a session (<id>.mesh, written once when it was created). A mesh
+// that does not read is left out with a line in the log: the session itself is intact.
+void SessionRegistry::restore_mesh(const std::string& id, animator::Session& session) const {
+  const std::optional<std::string> bytes = store_.read_mesh(id);
+  if (!bytes) return;
+  try {
+    session.set_skin(std::make_shared<const core::SkinnedMesh>(
+        decode_mesh_binary(*bytes, session.model().njoints, store_.mesh_path(id))));
+  } catch (const std::exception& e) {
+    std::cerr << "pindrag serve: session " << id << " opens without its mesh: " << e.what() << "\n";
+  }
+}
+
 std::shared_ptr<SessionActor> SessionRegistry::load(const std::string& id) {
   const std::string path = store_.session_path(id);
   SessionJournal::Loaded loaded;
@@ -65,6 +80,7 @@ std::shared_ptr<SessionActor> SessionRegistry::load(const std::string& id) {
     // the snapshot with the journal's later records replayed; what it drops goes to the log
     loaded = SessionJournal::load(path, std::cerr);
     loaded.session->set_limits(options_.limits);
+    restore_mesh(id, *loaded.session);
   } catch (const std::exception& e) {
     throw std::runtime_error("session " + id + ": its saved file does not load: " + e.what());
   }
@@ -121,6 +137,7 @@ SessionHandle SessionRegistry::create(std::unique_ptr<animator::Session> session
     const std::string path = store_.session_path(handle.id);
     try {
       store_.write_token(handle.id, handle.token);
+      if (session->skin()) store_.write_mesh(handle.id, encode_mesh_binary(*session->skin()));
     } catch (const std::system_error& e) {
       throw animator::SessionWriteError(e.code().value(), e.what());
     }

@@ -125,6 +125,7 @@ class SessionRegistry {
   using Map = std::map<std::string, Entry, std::less<>>;
 
   std::shared_ptr<SessionActor> load(const std::string& id);
+  void restore_mesh(const std::string& id, animator::Session& session) const;
   void make_room(std::unique_lock<std::mutex>& lock);
   void reap();
 

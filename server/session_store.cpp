@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <system_error>
 
 #include "server/security.hpp"
@@ -170,6 +171,25 @@ void SessionStore::stat(std::vector<StoredSession>& sessions) const {
     const auto time = entry.last_write_time(file_ec);
     if (!file_ec) it->second->modified = std::max(it->second->modified, unix_seconds(time));
   }
+}
+
+std::string SessionStore::mesh_path(const std::string& id) const {
+  if (dir_.empty()) return {};
+  return (fs::path(dir_) / (id + ".mesh")).string();
+}
+
+void SessionStore::write_mesh(const std::string& id, const std::string& bytes) const {
+  if (dir_.empty()) return;
+  write_private_file(mesh_path(id), bytes);
+}
+
+std::optional<std::string> SessionStore::read_mesh(const std::string& id) const {
+  if (dir_.empty()) return std::nullopt;
+  std::ifstream f(mesh_path(id), std::ios::binary);
+  if (!f) return std::nullopt;
+  std::ostringstream bytes;
+  bytes << f.rdbuf();
+  return bytes.str();
 }
 
 void SessionStore::touch(const std::string& id) const {

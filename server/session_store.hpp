@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ class SessionStore {
   void stat(std::vector<StoredSession>& sessions) const;
   /// Marks the session as used now (the token file's time), so expiry spares it.
   void touch(const std::string& id) const;
+  /// <dir>/sessions/<id>.mesh: the character's skinned mesh (server/mesh_binary.hpp), written
+  /// once when the session is created; "" when not persistent.
+  std::string mesh_path(const std::string& id) const;
+  /// Writes <id>.mesh (0600, atomically). @throws std::system_error naming the file
+  void write_mesh(const std::string& id, const std::string& bytes) const;
+  /// The bytes of <id>.mesh; empty when there is none (or no store).
+  std::optional<std::string> read_mesh(const std::string& id) const;
   /// Deletes every file of the session. @throws std::system_error naming the file
   void remove(const std::string& id) const;
 

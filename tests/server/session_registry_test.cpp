@@ -1,19 +1,23 @@
 // Tests for server/session_registry.hpp without sockets: a bounded cache of live sessions over
 // the saved ones (eviction of the least recently used idle session, reload with its edits, one
-// load for concurrent lookups), removal, the list, and a registry without a data folder.
+// load for concurrent lookups), removal, the list, a registry without a data folder, and the
+// skinned mesh a session keeps beside its file.
 #include "server/session_registry.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
 #include <thread>
 #include <vector>
 
 #include "io/bundled_characters.hpp"
+#include "server/mesh_binary.hpp"
 
 namespace {
 
@@ -79,6 +83,102 @@ TEST_F(SessionRegistryTest, TheLeastRecentlyUsedIdleSessionLeavesMemoryAndComesB
   ASSERT_EQ(found.status, 200);
   EXPECT_EQ(found.actor->call([](animator::Session& s) { return s.keys().keys().size(); }), 1u);
   EXPECT_TRUE(eventually([&] { return r->live() <= 2; }));
+}
+
+// a small mesh on human48: a triangle on the pelvis and one shared by the pelvis and a thigh
+core::SkinnedMesh small_mesh() {
+  core::SkinnedMesh m;
+  m.name = "patch";
+  m.positions = {{0, 1, 0}, {0.1f, 1, 0}, {0, 1.1f, 0}, {0.1f, 0.8f, 0}};
+  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  m.triangles = {{0, 1, 2}, {1, 3, 2}};
+  m.bones = {1, 2};
+  m.inverse_bind = {core::Transform::from_translation(core::Vector3(0, -1, 0)),
+                    core::Transform::from_translation(core::Vector3(-0.1, -0.9, 0))};
+  m.joints = {{0, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}};
+  m.weights = {{1, 0, 0, 0}, {0.5f, 0.5f, 0, 0}, {1, 0, 0, 0}, {1, 0, 0, 0}};
+  m.base_color = Eigen::Vector4f(0.2f, 0.4f, 0.6f, 1.0f);
+  return m;
+}
+
+void expect_same_mesh(const core::SkinnedMesh& a, const core::SkinnedMesh& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.normals, b.normals);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.joints, b.joints);
+  EXPECT_EQ(a.weights, b.weights);
+  EXPECT_EQ(a.bones, b.bones);
+  ASSERT_EQ(a.inverse_bind.size(), b.inverse_bind.size());
+  for (std::size_t k = 0; k < a.inverse_bind.size(); ++k) {
+    EXPECT_EQ(a.inverse_bind[k].R, b.inverse_bind[k].R);
+    EXPECT_EQ(a.inverse_bind[k].p, b.inverse_bind[k].p);
+  }
+  EXPECT_EQ(a.base_color, b.base_color);
+}
+
+TEST_F(SessionRegistryTest, ASkinnedSessionComesBackWithItsMeshAndABrokenMeshFileLosesOnlyIt) {
+  const core::SkinnedMesh mesh = small_mesh();
+  std::string id, token, other_id, other_token;
+  {
+    auto r = registry(4);
+    auto session = new_session();
+    session->set_skin(std::make_shared<const core::SkinnedMesh>(mesh));
+    const server::SessionHandle a = r->create(std::move(session));
+    const server::SessionHandle b = r->create([&] {
+      auto s = new_session();
+      s->set_skin(std::make_shared<const core::SkinnedMesh>(mesh));
+      return s;
+    }());
+    id = a.id, token = a.token, other_id = b.id, other_token = b.token;
+    a.actor->call([](animator::Session& s) { s.key_insert(0.5); }, /*edit=*/true);
+  }
+  ASSERT_TRUE(fs::exists(dir_ / "sessions" / (id + ".mesh")));
+  // the other session's mesh file is cut short
+  const fs::path broken = dir_ / "sessions" / (other_id + ".mesh");
+  fs::resize_file(broken, fs::file_size(broken) - 9);
+
+  auto r = registry(4);
+  std::ostringstream log;
+  ASSERT_EQ(r->restore(log), 2) << log.str();
+  server::SessionLookup found = r->find(id, token);
+  ASSERT_EQ(found.status, 200);
+  const core::SkinnedMesh back = found.actor->call(
+      [](animator::Session& s) { return s.skin() ? *s.skin() : core::SkinnedMesh{}; });
+  expect_same_mesh(back, mesh);
+  EXPECT_EQ(found.actor->call([](animator::Session& s) { return s.keys().keys().size(); }), 1u);
+  const server::SessionLookup other = r->find(other_id, other_token);
+  ASSERT_EQ(other.status, 200);
+  EXPECT_FALSE(other.actor->call([](animator::Session& s) { return s.skin() != nullptr; }));
+  // deleting a session deletes its mesh
+  ASSERT_EQ(r->remove(id, token), 409);  // `found` holds it
+  found.actor.reset();
+  ASSERT_EQ(r->remove(id, token), 200);
+  EXPECT_FALSE(fs::exists(dir_ / "sessions" / (id + ".mesh")));
+}
+
+TEST(MeshBinary, RoundTripsAndRefusesWhatDoesNotFitNamingTheField) {
+  const core::SkinnedMesh mesh = small_mesh();
+  const std::string bytes = server::encode_mesh_binary(mesh);
+  expect_same_mesh(server::decode_mesh_binary(bytes, 5, "m.mesh"), mesh);
+  const auto refused = [&](const std::string& b, int nlinks, const std::string& fragment) {
+    try {
+      server::decode_mesh_binary(b, nlinks, "m.mesh");
+      ADD_FAILURE() << "accepted; expected " << fragment;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("m.mesh: " + fragment), std::string::npos) << e.what();
+    }
+  };
+  refused(bytes.substr(0, bytes.size() - 8), 5, "weights");
+  refused("PDMX" + bytes.substr(4), 5, "not a pindrag mesh");
+  refused(bytes.substr(0, 10), 5, "header");
+  refused(bytes, 2, "bones");  // bone 2 is beyond a character of one link
+  std::string nan_position = bytes;
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 4, 4);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nan_position.data() + 8 + length, &nan, 4);
+  refused(nan_position, 5, "positions");
 }
 
 TEST_F(SessionRegistryTest, ConcurrentLookupsOfAStoredSessionLoadItOnce) {
