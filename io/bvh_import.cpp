@@ -310,18 +310,41 @@ void import_motion(const BvhDocument& doc,
 
 }  // namespace
 
+namespace {
+
+// the units a BVH file is read in: by key (the page and options), scale and name
+struct Candidate {
+  const char* key;
+  double scale;
+  const char* unit;
+};
+constexpr Candidate kUnits[] = {{"m", 1.0, "metres"},
+                                {"cm", 0.01, "centimetres"},
+                                {"mm", 0.001, "millimetres"},
+                                {"in", 0.0254, "inches"},
+                                {"cmu", kCmuUnit, "CMU units (1/0.45 inch)"}};
+
+}  // namespace
+
+std::optional<double> parse_bvh_import_unit(std::string_view name, std::string_view field) {
+  if (name.empty() || bvh_detail::iequals(name, "auto")) return std::nullopt;
+  for (const Candidate& c : kUnits) {
+    if (bvh_detail::iequals(name, c.key)) return c.scale;
+  }
+  throw std::invalid_argument(std::string(field) + ": '" + std::string(name) +
+                              "' (rule: one of auto, m, cm, mm, in, cmu)");
+}
+
+std::string bvh_unit_name(double scale) {
+  for (const Candidate& c : kUnits) {
+    if (scale == c.scale) return c.unit;
+  }
+  return num(scale) + " m per unit";
+}
+
 BvhUnit bvh_auto_scale(const BvhDocument& doc) {
   const double size = bvh_rest_extent(doc).largest;
   if (!(size > 0) || !std::isfinite(size)) return {1.0, "metres (the skeleton has no extent)"};
-  struct Candidate {
-    double scale;
-    const char* unit;
-  };
-  static constexpr Candidate kUnits[] = {{1.0, "metres"},
-                                         {0.01, "centimetres"},
-                                         {0.001, "millimetres"},
-                                         {0.0254, "inches"},
-                                         {kCmuUnit, "CMU units (1/0.45 inch)"}};
   constexpr double kTypical = 1.7;  // metres, a standing adult or an arm span
   BvhUnit best{1.0, ""};
   double best_error = kInfinity;

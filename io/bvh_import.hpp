@@ -54,6 +54,13 @@ struct BvhUnit {
 };
 BvhUnit bvh_auto_scale(const BvhDocument& doc);
 
+/// A unit chosen by name for a BVH import: "auto" (empty: bvh_auto_scale), "m", "cm", "mm",
+/// "in" or "cmu"; the scale in metres per file unit.
+/// @throws std::invalid_argument naming `field` and the allowed names
+std::optional<double> parse_bvh_import_unit(std::string_view name, std::string_view field);
+/// The name of a scale among the units above ("centimetres", ...), else "<scale> m per unit".
+std::string bvh_unit_name(double scale);
+
 /// What the writer needs to write an imported skeleton back the same way.
 struct BvhLayout {
   struct Joint {

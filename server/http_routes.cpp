@@ -269,8 +269,16 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         if (!req.has_file("character"))
           return send_error(res, 400, "character: a file field \"character\" is required");
         const httplib::MultipartFormData file = req.get_file_value("character");
+        std::optional<double> bvh_scale;
+        if (req.has_file("units")) {
+          try {
+            bvh_scale = io::parse_bvh_import_unit(req.get_file_value("units").content, "units");
+          } catch (const std::invalid_argument& e) {
+            return send_error(res, 400, e.what());
+          }
+        }
         session = session_from_upload("character", file.filename, file.content, ctx.temp_root,
-                                      ctx.uploads);
+                                      ctx.uploads, bvh_scale);
       } else {
         if (req.body.size() > kMaxJsonBodyBytes)
           return send_error(res, 413, "body: larger than 1 MiB");

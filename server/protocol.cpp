@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "animator/session_file.hpp"
+#include "io/bvh.hpp"
 
 namespace server {
 namespace {
@@ -152,6 +153,8 @@ json state_json(const animator::Session& s, const std::string& session_id) {
 json snapshot_json(const animator::Session& s, const std::string& session_id) {
   json j = state_json(s, session_id);
   j["character"] = character_json(s.model(), s.character(), s.skin() != nullptr);
+  // a character read from BVH: the unit its file was read in
+  if (s.bvh_source()) j["character"]["unit"] = io::bvh_unit_name(s.bvh_source()->scale);
   return j;
 }
 

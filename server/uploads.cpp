@@ -114,11 +114,14 @@ bool same_skeleton(const core::Model& a, const core::Model& b) {
          a.joint_type == b.joint_type && a.parent == b.parent;
 }
 
-// `character`: the model a clip is loaded onto, whose joint types the clip's joints follow
+// `character`: the model a clip is loaded onto, whose joint types the clip's joints follow;
+// `scale`: metres per file unit (empty: guessed)
 io::BvhImport load_bvh(const std::string& path,
                        const animator::Limits& limits,
-                       const core::Model* character = nullptr) {
+                       const core::Model* character = nullptr,
+                       std::optional<double> scale = {}) {
   io::BvhImportOptions options;
+  options.scale = scale;
   options.budget = animator::clip_budget(limits);
   options.joint_types_of = character;
   return io::load_bvh_file(path, options);
@@ -142,10 +145,11 @@ std::string byte_text(std::size_t bytes) {
 
 std::unique_ptr<animator::Session> session_from_file(const std::string& path,
                                                      const std::string& name,
-                                                     const animator::Limits& limits) {
+                                                     const animator::Limits& limits,
+                                                     std::optional<double> bvh_scale) {
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
-    io::BvhImport imported = load_bvh(path, limits);
+    io::BvhImport imported = load_bvh(path, limits, nullptr, bvh_scale);
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
     session->set_bvh_source(std::make_shared<const io::BvhLayout>(std::move(imported.layout)));
@@ -175,7 +179,8 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        const std::string& file_name,
                                                        const std::string& bytes,
                                                        const std::string& temp_root,
-                                                       const UploadRules& rules) {
+                                                       const UploadRules& rules,
+                                                       std::optional<double> bvh_scale) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".urdf" && ext != ".json" && ext != ".bvh" && !is_assimp_format(ext)) {
@@ -187,7 +192,7 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
   const std::string name = safe_file_name(fs::path(file_name).stem().string(), "character");
   TempUpload upload(temp_root, ext, bytes);
   try {
-    return session_from_file(upload.file(), name, rules.limits);
+    return session_from_file(upload.file(), name, rules.limits, bvh_scale);
   } catch (const std::exception& e) {
     throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
   }

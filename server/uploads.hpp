@@ -53,9 +53,11 @@ class UploadError : public std::runtime_error {
 /// extension: .urdf, .json, .bvh, .glb, .gltf, .fbx, .dae; a BVH or an animated skinned file also
 /// brings its first clip), held to `limits`: a clip beyond them is refused while its file is read.
 /// @throws core::ModelError or std::runtime_error naming the file
+/// `bvh_scale`: metres per BVH file unit; empty: guessed from the figure's size (io/bvh.hpp).
 std::unique_ptr<animator::Session> session_from_file(const std::string& path,
                                                      const std::string& name,
-                                                     const animator::Limits& limits = {});
+                                                     const animator::Limits& limits = {},
+                                                     std::optional<double> bvh_scale = {});
 
 /// A new session from an uploaded character file (.urdf, .json, .bvh, .glb, .gltf, .fbx, .dae);
 /// a BVH or an animated glTF/FBX/COLLADA file also brings its first clip.
@@ -66,7 +68,8 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        const std::string& file_name,
                                                        const std::string& bytes,
                                                        const std::string& temp_root,
-                                                       const UploadRules& rules = {});
+                                                       const UploadRules& rules = {},
+                                                       std::optional<double> bvh_scale = {});
 
 /// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae). The clip must fit
 /// `model` (same links, same joint types), else UploadError 422; caps and budget as for

@@ -3,7 +3,8 @@
 // session while the one left stays saved; "Load clip…" with a clip of another skeleton offers to
 // open it as its own character, which brings the clip; a malformed file is refused with a message
 // naming it and the session stays as it was. Every file of ../shared/data/{bvh,gltf,urdf} opens
-// as a session; the URDF robots stand on the ground. Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
+// as a session; the URDF robots stand on the ground; a BVH opens in the unit guessed from its
+// height or in the one chosen. Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
 import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
@@ -154,6 +155,44 @@ test('Load clip with another skeleton offers to open it as its own character, cl
   console.log(`opened as its own character: ${links.length} links, clip of ${opened.snapshot.clip?.frames} frames`);
   assert.ok(links.includes('Hips') || links.includes('hip'), `links: ${links.slice(0, 5)}`);
   assert.ok(opened.snapshot.clip && opened.snapshot.clip.frames > 100, 'the clip came with it');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('a BVH character opens in the unit guessed from its height, or in the unit chosen', { skip: noData }, async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const file = path.join(DATA_DIR, 'bvh', 'cmu_walk_cgspeed.bvh');
+  const heights = {};
+  for (const units of ['auto', 'm']) {
+    const from = await sessionOf(page);
+    await page.click('#open-character');
+    await page.waitForSelector('#open-dialog:not([hidden]) #open-units');
+    await page.selectOption('#open-units', units);
+    await page.setInputFiles('#open-character-file', file);
+    const opened = await switchedFrom(page, from.id);
+    heights[units] = { height: opened.snapshot.character.height, unit: opened.snapshot.character.unit };
+  }
+  console.log(`cmu_walk_cgspeed.bvh: ${JSON.stringify(heights)}`);
+  const guessed = heights.auto;
+  assert.ok(guessed.height > 1.2 && guessed.height < 2.2, `guessed unit gives a ${guessed.height} m figure`);
+  assert.notEqual(guessed.unit, 'metres');
+  assert.equal(heights.m.unit, 'metres');
+  // the same file in metres: the figure is as many metres tall as it is units tall
+  const scales = { centimetres: 0.01, millimetres: 0.001, inches: 0.0254, 'CMU units (1/0.45 inch)': 2.54 / 45 };
+  assert.ok(guessed.unit in scales, `unit ${guessed.unit}`);
+  assert.ok(Math.abs(heights.m.height * scales[guessed.unit] - guessed.height) < 1e-9 * heights.m.height);
+  // a unit that is not one of them is refused naming the field
+  const form = new FormData();
+  form.append('character', new Blob([fs.readFileSync(file)]), 'walk.bvh');
+  form.append('units', 'furlong');
+  const refused = await fetch(`${server.url}api/sessions`, { method: 'POST', body: form });
+  assert.equal(refused.status, 400);
+  assert.match((await refused.json()).error, /^units: 'furlong' \(rule: one of auto, m, cm, mm, in, cmu\)/);
+  // the dialog says which unit the open character was read in
+  await page.click('#open-character');
+  await page.waitForSelector('#open-dialog:not([hidden]) #open-current-unit');
+  assert.match(await page.$eval('#open-current-unit', (e) => e.textContent), /metres/);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -50,10 +50,12 @@ export function createApi() {
       return res.json();
     },
 
-    /** A new session on a character file (URDF, JSON, BVH, glTF/GLB, FBX, DAE): {id, token}. */
-    async createSessionFromFile(file) {
+    /** A new session on a character file (URDF, JSON, BVH, glTF/GLB, FBX, DAE): {id, token}.
+     *  `units`: a BVH file's unit (auto, m, cm, mm, in, cmu); auto guesses it from the figure's size. */
+    async createSessionFromFile(file, units = 'auto') {
       const form = new FormData();
       form.append('character', file, file.name);
+      if (/\.bvh$/i.test(file.name) && units !== 'auto') form.append('units', units);
       const res = await fetch('/api/sessions', { method: 'POST', headers: api.keyHeaders(), body: form });
       if (!res.ok) throw await failure(`open ${file.name}`, res);
       return res.json();

@@ -9,6 +9,14 @@ import { h } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
 
 const ACCEPTED_CHARACTERS = '.urdf,.json,.bvh,.glb,.gltf,.fbx,.dae';
+const BVH_UNITS = [
+  ['auto', 'guess from its height'],
+  ['m', 'metres'],
+  ['cm', 'centimetres'],
+  ['mm', 'millimetres'],
+  ['in', 'inches'],
+  ['cmu', 'CMU units'],
+];
 
 export function createOpenDialog(state, api, switchSession) {
   const notify = (text, kind = 'info') => state.signals.notify.dispatch({ text, kind });
@@ -61,10 +69,15 @@ export function createOpenDialog(state, api, switchSession) {
         notify(`${file.name}: ${(file.size / 2 ** 20).toFixed(1)} MiB, over the ${(limit / 2 ** 20).toFixed(0)} MiB upload limit`, 'error');
         return;
       }
-      openCreated(api.createSessionFromFile(file), file.name);
+      openCreated(api.createSessionFromFile(file, units.value), file.name);
     });
     const button = h('button#open-file', { type: 'button', onclick: () => input.click() }, 'Character file…');
-    return [button, input];
+    const units = h(
+      'select#open-units',
+      { title: 'The unit a BVH file is read in (others carry theirs)' },
+      ...BVH_UNITS.map(([value, label]) => h('option', { value }, label)),
+    );
+    return [button, input, h('label.open-meta', {}, 'BVH unit ', units)];
   }
 
   async function characterRows() {
@@ -124,6 +137,9 @@ export function createOpenDialog(state, api, switchSession) {
       h('div.open-slot.characters'),
       h('h3', {}, 'Your own file'),
       h('p.open-note', {}, 'URDF, pindrag JSON, BVH, glTF/GLB, FBX or DAE; a file with motion brings its clip.'),
+      state.character?.unit
+        ? h('p.open-note#open-current-unit', {}, `This character's BVH file was read in ${state.character.unit}; to read it in another unit, open it again with the unit chosen here.`)
+        : null,
       h('div.open-row', {}, ...fileButton()),
       h('h3', {}, 'A saved session'),
       h('div.open-slot.sessions'),

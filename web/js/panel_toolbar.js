@@ -110,6 +110,7 @@ export function createToolbar(state, api, connection, actions, openDialog) {
 
   signals.characterLoaded.add((c) => {
     characterName.textContent = c.name;
+    characterName.title = c.unit ? `read from BVH in ${c.unit}` : '';
   });
   signals.sessionStateChanged.add((s) => {
     const u = s.undo || {};
