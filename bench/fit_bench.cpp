@@ -29,6 +29,7 @@ void BM_MarkerFit(benchmark::State& state) {
   ik::MarkerFitSettings fs;
   fs.enforce_ranges = state.range(0) != 0;
   const ik::CalibrationResult c = ik::calibrate_markers(model, set, tm.trajectories, fs);
+  fs.threads = static_cast<int>(state.range(1));
   double mean_error = 0;
   for (auto _ : state) {
     const ik::MarkerFitResult r = ik::fit_trajectories(*c.model, c.set, tm.trajectories, fs);
@@ -38,7 +39,15 @@ void BM_MarkerFit(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * tm.trajectories.frames);  // items = frames
   state.counters["mean_error_mm"] = mean_error * 1000;
 }
-BENCHMARK(BM_MarkerFit)->ArgName("ranges")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+// wall time: with threads the work is spread over cores
+BENCHMARK(BM_MarkerFit)
+    ->ArgNames({"ranges", "threads"})
+    ->Args({1, 1})
+    ->Args({0, 1})
+    ->Args({1, 2})
+    ->Args({0, 2})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

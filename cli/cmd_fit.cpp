@@ -24,6 +24,7 @@ namespace {
 struct FitArgs {
   std::string trial, character = "human48", markers, static_range, out, report, scaled;
   bool no_ranges = false;
+  int threads = 0;  // the trial's fit: 0 = one per core
 };
 
 // "--static a:b" (frames, b exclusive), "all" or "none"; empty: the first second.
@@ -103,8 +104,10 @@ void fit(const FitArgs& a) {
   in.calibration_us =
       std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
   ProgressBar bar("fit " + a.trial);
-  const ik::MarkerFitResult r = ik::fit_trajectories(*out.model, fitted_set, tm.trajectories, fs,
-                                                     [&bar](double x) { bar.update(x); });
+  ik::MarkerFitSettings trial_fit = fs;  // calibration stays on one thread: one path
+  trial_fit.threads = a.threads;
+  const ik::MarkerFitResult r = ik::fit_trajectories(
+      *out.model, fitted_set, tm.trajectories, trial_fit, [&bar](double x) { bar.update(x); });
   bar.finish();
   in.model = out.model.get();
   in.set = &fitted_set;
@@ -134,6 +137,10 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--report", args->report, "fit report (JSON)");
   cmd->add_option("--scaled-character", args->scaled,
                   "the calibrated (segment-scaled) character (JSON)");
+  cmd->add_option("--threads", args->threads,
+                  "threads fitting a long trial in chunks (0: one per core; a chunk needs " +
+                      std::to_string(ik::kMinChunkFrames) + " frames)")
+      ->check(CLI::Range(0, 256));
   cmd->add_flag("--no-ranges", args->no_ranges,
                 "let joints leave their ranges (the figure's ranges are clinical norms)");
   cmd->callback([args] {

@@ -53,11 +53,20 @@ struct MarkerFitSettings {
   int min_root_markers = 1;          // fewer present markers on the root link: likewise
   double damping = kDefaultDamping;  // SR inverse k at residuals of 1 m (Sugihara schedule)
   bool enforce_ranges = true;
-  bool predict = true;
+  bool predict = true;  // warm-start from the previous pose moved on by the last velocity
   // weight of a pull toward the rest posture on every joint below the root: keeps joints the
   // markers do not see (a spine or neck without markers, a toe) from drifting (0: none)
-  double reference_weight = 0.0;  // warm-start from the previous pose moved on by the last velocity
+  double reference_weight = 0.0;
+  // fit_trajectories: threads that fit a long trial in contiguous chunks (0: one per core). A
+  // chunk starts kChunkLeadIn frames early, from the rest pose placed on the markers, and keeps
+  // only its own frames, so each of them is warm-started as in a single pass.
+  int threads = 1;
 };
+
+/// Frames a chunk of fit_trajectories fits before its first one and discards (warm-up).
+constexpr int kChunkLeadIn = 30;
+/// Fewest frames per thread worth a chunk of its own.
+constexpr int kMinChunkFrames = 200;
 
 /// Empty when usable, else a message naming the first bad field.
 std::string validate(const MarkerFitSettings& s);
@@ -125,7 +134,8 @@ struct MarkerFitResult {
 };
 
 /// Fits every frame of `trajectories` (markers in the order of the set), warm-starting each
-/// from the previous one. `progress` (optional) receives the fraction done.
+/// from the previous one; with settings.threads other than 1, in chunks on several threads.
+/// `progress` (optional, called on the calling thread) receives the fraction done.
 MarkerFitResult fit_trajectories(const core::Model& model,
                                  const MarkerSet& set,
                                  const MarkerTrajectories& trajectories,
