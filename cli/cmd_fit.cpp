@@ -3,12 +3,14 @@
 // The marker offsets and segment scales are calibrated on the static range, then every frame is
 // fitted (ik/marker_calibration.hpp, ik/marker_fit.hpp) and the motion is written as a clip.
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 
 #include "cli/c3d_markers.hpp"
 #include "cli/clip_file.hpp"
 #include "cli/commands.hpp"
 #include "cli/fit_report.hpp"
+#include "cli/fit_report_page.hpp"
 #include "cli/json_fields.hpp"
 #include "cli/marker_set_file.hpp"
 #include "cli/progress_bar.hpp"
@@ -22,7 +24,7 @@ namespace cli {
 namespace {
 
 struct FitArgs {
-  std::string trial, character = "human48", markers, static_range, out, report, scaled;
+  std::string trial, character = "human48", markers, static_range, out, report, report_html, scaled;
   bool no_ranges = false;
   int threads = 0;  // the trial's fit: 0 = one per core
 };
@@ -69,6 +71,10 @@ void write_outputs(const FitArgs& a,
                    const nlohmann::json& report) {
   write_clip_file(a.out, out, clip);
   if (!a.report.empty()) io::write_file_atomically(a.report, report.dump(2) + "\n");
+  if (!a.report_html.empty()) {
+    io::write_file_atomically(a.report_html,
+                              fit_report_html(report, std::filesystem::path(a.trial).filename()));
+  }
   if (!a.scaled.empty()) io::save_character_json_file(*out.model, a.scaled);
 }
 
@@ -135,6 +141,8 @@ void add_fit_command(CLI::App& app) {
                   "default: the first second");
   cmd->add_option("-o,--output", args->out, "fitted clip (.bvh, .gltf, .glb)")->required();
   cmd->add_option("--report", args->report, "fit report (JSON)");
+  cmd->add_option("--report-html", args->report_html,
+                  "the fit report as a page with a plot of the error over time (HTML)");
   cmd->add_option("--scaled-character", args->scaled,
                   "the calibrated (segment-scaled) character (JSON)");
   cmd->add_option("--threads", args->threads,

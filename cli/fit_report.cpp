@@ -46,7 +46,8 @@ nlohmann::json fit_report(const FitReportInput& in) {
           {"scales", scale_table(in)},
           {"calibration_rms", in.calibration_rms},
           {"calibration_us", in.calibration_us},
-          {"us_per_frame", r.microseconds_per_frame}};
+          {"us_per_frame", r.microseconds_per_frame},
+          {"frame_time", r.clip.frame_time}};
 }
 
 }  // namespace cli

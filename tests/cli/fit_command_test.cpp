@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "cli/commands.hpp"
 #include "cli/json_fields.hpp"
@@ -113,10 +114,10 @@ TEST_F(FitCommand, FitsASyntheticTrialToABvhAndAReport) {
   const core::Clip truth = marker_fit_test::smooth_motion(*model, 90, 60.0);
   const ik::MarkerTrajectories t = marker_fit_test::markers_of(*model, set, truth, 0.001, 0.2);
   std::ofstream(path("trial.c3d"), std::ios::binary) << c3d_file(set, t);
-  ASSERT_EQ(
-      run({"fit", path("trial.c3d"), "--character", "human48", "-o", path("out.bvh"), "--report",
-           path("report.json"), "--static", "0:90", "--scaled-character", path("scaled.json")}),
-      0);
+  ASSERT_EQ(run({"fit", path("trial.c3d"), "--character", "human48", "-o", path("out.bvh"),
+                 "--report", path("report.json"), "--report-html", path("report.html"), "--static",
+                 "0:90", "--scaled-character", path("scaled.json")}),
+            0);
   const io::BvhImport bvh = io::load_bvh_file(path("out.bvh"));
   EXPECT_EQ(bvh.clip.size(), 90);
   const nlohmann::json report = cli::read_json_file(path("report.json"));
@@ -126,6 +127,20 @@ TEST_F(FitCommand, FitsASyntheticTrialToABvhAndAReport) {
   EXPECT_GT(report["us_per_frame"].get<double>(), 0);
   EXPECT_NEAR(report["scales"]["l_thigh"].get<double>(), 1.0, 0.02);
   EXPECT_TRUE(fs::exists(path("scaled.json")));
+  // the page: the plot of the error over time (one line through the fitted frames) and one row
+  // per marker of the set
+  std::ifstream page_file(path("report.html"));
+  const std::string page((std::istreambuf_iterator<char>(page_file)), {});
+  EXPECT_NE(page.find("<h1>trial.c3d on human48</h1>"), std::string::npos);
+  EXPECT_NE(page.find("<svg"), std::string::npos);
+  EXPECT_NE(page.find("<path d=' M"), std::string::npos);
+  std::size_t rows = 0;
+  for (std::size_t at = page.find("<tr><td>"); at != std::string::npos;
+       at = page.find("<tr><td>", at + 1)) {
+    ++rows;
+  }
+  EXPECT_GE(rows, static_cast<std::size_t>(set.size()));
+  EXPECT_NE(page.find("<td>LKNE</td><td>l_thigh</td>"), std::string::npos);
 }
 
 TEST_F(FitCommand, RefusesAMissingTrial) {
