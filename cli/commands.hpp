@@ -17,5 +17,6 @@ void add_edit_command(CLI::App& app);
 void add_thumbnail_command(CLI::App& app);
 void add_simulate_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
+void add_retarget_command(CLI::App& app);
 
 }  // namespace cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   cli::add_thumbnail_command(app);
   cli::add_simulate_command(app);
   cli::add_fit_command(app);
+  cli::add_retarget_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }
