@@ -349,8 +349,9 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         }
         try {
           const httplib::MultipartFormData file = req.get_file_value("clip");
+          const bool retarget = req.get_param_value("retarget") == "1";
           core::Clip clip = clip_from_upload("clip", file.filename, file.content, actor->model(),
-                                             ctx.temp_root, ctx.uploads);
+                                             ctx.temp_root, ctx.uploads, retarget);
           const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
           auto shared = std::make_shared<core::Clip>(std::move(clip));
           actor->call_within(

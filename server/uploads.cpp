@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <system_error>
 
+#include "animator/retarget.hpp"
 #include "core/model_edit.hpp"
 #include "io/assimp_import.hpp"
 #include "io/bvh.hpp"
@@ -203,7 +204,8 @@ core::Clip clip_from_upload(const std::string& field,
                             const std::string& bytes,
                             const core::Model& model,
                             const std::string& temp_root,
-                            const UploadRules& rules) {
+                            const UploadRules& rules,
+                            bool retarget) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".bvh" && !is_assimp_format(ext)) {
@@ -230,6 +232,14 @@ core::Clip clip_from_upload(const std::string& field,
     throw;
   } catch (const std::exception& e) {
     throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
+  }
+  if (!same_skeleton(*clip_model, model) && retarget) {
+    try {
+      return animator::retarget(*clip_model, clip, model).clip;
+    } catch (const std::exception& e) {
+      throw UploadError(422, field + ": \"" + shown + "\": cannot be retargeted onto the " +
+                                 "session's character: " + e.what());
+    }
   }
   if (!same_skeleton(*clip_model, model)) {
     throw UploadError(

@@ -72,13 +72,16 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        std::optional<double> bvh_scale = {});
 
 /// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae). The clip must fit
-/// `model` (same links, same joint types), else UploadError 422; caps and budget as for
-/// session_from_upload. @throws UploadError
+/// `model` (same links, same joint types), else UploadError 422 (code "skeleton_differs") unless
+/// `retarget`: a clip of another skeleton is then retargeted onto `model`
+/// (animator/retarget.hpp), and one that cannot be (no recognisable legs) is a 422 naming why.
+/// Caps and budget as for session_from_upload. @throws UploadError
 core::Clip clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
                             const std::string& temp_root,
-                            const UploadRules& rules = {});
+                            const UploadRules& rules = {},
+                            bool retarget = false);
 
 }  // namespace server

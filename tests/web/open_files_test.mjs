@@ -1,10 +1,11 @@
 // Opening characters and clips from the page with `pindrag serve` in headless Chromium: "Open…"
 // opens a bundled character, a character file of the user's and a saved session, each in a new
 // session while the one left stays saved; "Load clip…" with a clip of another skeleton offers to
-// open it as its own character, which brings the clip; a malformed file is refused with a message
-// naming it and the session stays as it was. Every file of ../shared/data/{bvh,gltf,urdf} opens
-// as a session; the URDF robots stand on the ground; a BVH opens in the unit guessed from its
-// height or in the one chosen. Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
+// open it as its own character, which brings the clip, or to retarget it onto this character; a
+// malformed file is refused with a message naming it and the session stays as it was. Every file
+// of ../shared/data/{bvh,gltf,urdf} opens as a session; the URDF robots stand on the ground; a
+// BVH opens in the unit guessed from its height or in the one chosen.
+// Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
 import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
@@ -155,6 +156,25 @@ test('Load clip with another skeleton offers to open it as its own character, cl
   console.log(`opened as its own character: ${links.length} links, clip of ${opened.snapshot.clip?.frames} frames`);
   assert.ok(links.includes('Hips') || links.includes('hip'), `links: ${links.slice(0, 5)}`);
   assert.ok(opened.snapshot.clip && opened.snapshot.clip.frames > 100, 'the clip came with it');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Load clip with another skeleton can retarget it onto this character', { skip: noData }, async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  const clip = path.join(DATA_DIR, 'bvh', 'mixamo_naming_freebvh.bvh');
+  await page.setInputFiles('#clip-file', clip);
+  await page.waitForSelector('#open-dialog:not([hidden]) #retarget-clip', { timeout: 30000 });
+  assert.match(await page.$eval('#retarget-clip', (e) => e.textContent), /Retarget it onto human48/);
+  await page.click('#retarget-clip');
+  await page.waitForSelector('#open-dialog', { state: 'hidden', timeout: 60000 });
+  const s = await server.snapshot(before.id, before.token);
+  console.log(`retargeted onto human48: clip of ${s.clip?.frames} frames at ${(1 / s.clip?.frame_time).toFixed(1)} fps`);
+  assert.equal((await sessionOf(page)).id, before.id, 'the tab stays on its session');
+  assert.equal(s.character.name, 'human48');
+  assert.ok(s.clip && s.clip.frames > 30, 'the retargeted clip is the clip now');
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -105,10 +105,12 @@ export function createApi() {
       return res.arrayBuffer();
     },
 
-    async uploadClip(file) {
+    /** Loads a clip onto the character; `retarget`: a clip of another skeleton is retargeted onto it. */
+    async uploadClip(file, { retarget = false } = {}) {
       const form = new FormData();
       form.append('clip', file, file.name);
-      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip`, {
+      const query = retarget ? '?retarget=1' : '';
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip${query}`, {
         method: 'POST',
         headers: api.headers(),
         body: form,

@@ -3,7 +3,7 @@
 // clip) and the sessions saved from this browser. Opening makes a new session and this tab
 // switches to it; the current session stays saved and is listed here and in the Sessions panel.
 // It also asks what to do with a clip whose skeleton differs from the character's ("Load clip…"):
-// open it as its own character, or leave it.
+// open it as its own character, retarget it onto this one, or leave it.
 
 import { h } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
@@ -151,7 +151,24 @@ export function createOpenDialog(state, api, switchSession) {
     card.querySelector('.open-slot.sessions')?.replaceChildren(sessions);
   }
 
-  /** A clip of another skeleton was refused: offer to open the file as its own character. */
+  // the clip retargeted onto this character (animator/retarget.hpp): it becomes the clip here
+  async function retargetHere(file) {
+    const status = card.querySelector('.open-status');
+    if (status) status.textContent = `retargeting ${file.name}…`;
+    card.querySelectorAll('button').forEach((b) => (b.disabled = true));
+    try {
+      const r = await api.uploadClip(file, { retarget: true });
+      notify(`${file.name} retargeted: ${r.frames} frames at ${(1 / r.frame_time).toFixed(1)} fps`);
+      close();
+    } catch (err) {
+      card.querySelectorAll('button').forEach((b) => (b.disabled = false));
+      if (status) status.textContent = err.message;
+      notify(err.message, 'error');
+    }
+  }
+
+  /** A clip of another skeleton was refused: offer to open the file as its own character, or to
+   *  retarget it onto this one. */
   function offerOwnCharacter(file, message) {
     const character = state.character?.name || 'this character';
     show(
@@ -163,6 +180,7 @@ export function createOpenDialog(state, api, switchSession) {
         'div.open-actions',
         {},
         h('button#open-as-own', { type: 'button', onclick: () => openCreated(api.createSessionFromFile(file), file.name) }, 'Open it as its own character'),
+        h('button#retarget-clip', { type: 'button', onclick: () => retargetHere(file) }, `Retarget it onto ${character}`),
         h('button', { type: 'button', onclick: close }, 'Cancel'),
       ),
     );
