@@ -50,7 +50,8 @@ const Convention kConventions[] = {
       "leftcollar", "leftshoulder|leftuparm", "leftelbow|leftlowarm", "leftwrist|lefthand",
       "rightcollar", "rightshoulder|rightuparm", "rightelbow|rightlowarm", "rightwrist|righthand",
       "lefthip|leftupleg", "leftknee|leftlowleg", "leftankle|leftfoot", "lefttoe|lefttoes",
-      "righthip|rightupleg", "rightknee|rightlowleg", "rightankle|rightfoot", "righttoe|righttoes"}},
+      "righthip|rightupleg", "rightknee|rightlowleg", "rightankle|rightfoot",
+      "righttoe|righttoes"}},
     // 3ds Max Biped ("Bip01 L UpperArm"; the "Bip01" is dropped when names are normalized)
     {"biped", "",
      {"pelvis", "spine", "spine2|spine1", "neck", "head",
