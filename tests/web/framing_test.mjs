@@ -1,6 +1,6 @@
 // The camera frames characters of any size with `pindrag serve` in headless Chromium: a figure
-// 60 m tall (a character file in metres) and the bundled human48 both open with every
-// link on screen, and Home view frames them again after the camera was moved away.
+// 60 m tall (a character file in metres), the same figure 6 cm tall and the bundled human48 open
+// with every link on screen, and Home view frames them again after the camera was moved away.
 // Usage: node tests/web/framing_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
 import { test, before } from 'node:test';
@@ -38,6 +38,18 @@ const GIANT = JSON.stringify({
   ],
 });
 
+// the same figure a thousand times smaller: 6 cm tall
+const TINY = JSON.stringify(
+  JSON.parse(GIANT, (key, value) => {
+    if (key === 'name' && value === 'giant') return 'tiny';
+    if (key === 'mass') return value * 1e-9;
+    if (['ixx', 'iyy', 'izz'].includes(key)) return value * 1e-15;
+    if (['radius', 'length'].includes(key)) return value * 1e-3;
+    if (['xyz', 'size', 'com'].includes(key)) return value.map((x) => x * 1e-3);
+    return value;
+  }),
+);
+
 /** Creates a session from a character file and opens the page on it. */
 async function openOnUpload(name, text) {
   const form = new FormData();
@@ -71,15 +83,17 @@ async function checkFramed(page, what) {
   return seen;
 }
 
-test('a 60 m figure and the bundled human are framed when they open and by Home view', async () => {
+test('a 60 m figure, a 6 cm figure and the bundled human are framed when they open and by Home view', async () => {
   for (const [name, opened] of [
     ['human48', () => openPage(browser, server.url)],
     ['the 60 m figure', () => openOnUpload('giant.json', GIANT)],
+    ['the 6 cm figure', () => openOnUpload('tiny.json', TINY)],
   ]) {
     const { page, context, problems } = await opened();
     await page.waitForTimeout(300);
     const seen = await checkFramed(page, `${name} when opened`);
-    if (name !== 'human48') assert.ok(seen.top > 45, `the figure is only ${seen.top} m tall`);
+    if (name === 'the 60 m figure') assert.ok(seen.top > 45, `the figure is only ${seen.top} m tall`);
+    if (name === 'the 6 cm figure') assert.ok(seen.top < 0.06, `the figure is ${seen.top} m tall`);
     // move the camera far off, then Home view
     const box = await page.locator('canvas').first().boundingBox();
     for (let k = 0; k < 15; k++) await page.mouse.wheel(0, -400); // zoom in

@@ -99,6 +99,8 @@ export function createPinsView(state, viewport, skeleton, connection) {
       let m = markers.get(p.link);
       if (!m) {
         m = makeMarker();
+        // drawn for a person-sized figure: as big a part of any other
+        m.group.scale.setScalar(skeleton.figureScale());
         markers.set(p.link, m);
         group.add(m.group, m.line);
       }

@@ -18,7 +18,8 @@ const COLORS = {
   handlePinned: new THREE.Color(0xff9d1c),
   outOfRange: new THREE.Color(0xff3b30),
 };
-const HANDLE_RADIUS = 0.018;
+const HANDLE_RADIUS = 0.018; // on a figure of REFERENCE_HEIGHT; handles scale with the figure
+const REFERENCE_HEIGHT = 1.75;
 
 const toQuat = (R) => new THREE.Quaternion(R[1], R[2], R[3], R[0]);
 
@@ -59,6 +60,9 @@ export function createSkeletonView(state, viewport) {
   viewport.scene.add(overlay);
 
   let links = []; // per link: {group, meshes, material, baseColor, handle, side}
+  // the figure's size over a person's: a handle is the same part of any figure (1.8 cm on a
+  // person, 0.6 mm on a 6 cm figure); measured from the solids of the first pose
+  let figureScale = null;
   let bones = null;
   let boneParents = [];
   const status = []; // per link: limit status of its joint
@@ -83,6 +87,7 @@ export function createSkeletonView(state, viewport) {
   function build(character) {
     clear();
     const handleGeometry = new THREE.SphereGeometry(HANDLE_RADIUS, 14, 10);
+    figureScale = null; // measured on the first pose
     character.links.forEach((link, i) => {
       const group = new THREE.Group();
       group.name = link.name;
@@ -157,6 +162,11 @@ export function createSkeletonView(state, viewport) {
       bones.geometry.attributes.position.needsUpdate = true;
       bones.geometry.computeBoundingSphere();
     }
+    if (figureScale === null) {
+      const size = new THREE.Box3().setFromObject(root).getSize(new THREE.Vector3());
+      const largest = Math.max(size.x, size.y, size.z);
+      figureScale = Number.isFinite(largest) && largest > 0 ? largest / REFERENCE_HEIGHT : 1;
+    }
     restyle();
   }
 
@@ -180,7 +190,7 @@ export function createSkeletonView(state, viewport) {
       else if (pinned) hc.copy(COLORS.handlePinned);
       else if (out) hc.copy(COLORS.outOfRange);
       else hc.copy(COLORS.handle);
-      l.handle.scale.setScalar(hovered || selected || dragged ? 1.45 : pinned ? 1.2 : 1);
+      l.handle.scale.setScalar((figureScale ?? 1) * (hovered || selected || dragged ? 1.45 : pinned ? 1.2 : 1));
     }
     signals.renderRequested.dispatch();
   }
@@ -203,6 +213,8 @@ export function createSkeletonView(state, viewport) {
   const tmp = new THREE.Vector3();
   return {
     pickables,
+    /** The figure's size over a person's (1.75 m), for marks drawn at a person's size. */
+    figureScale: () => figureScale ?? 1,
     /** Draws the solids or not (a skinned mesh stands in for them); they stay pick targets. */
     setBodyVisible(visible) {
       for (const l of links) for (const m of l.meshes) m.visible = visible;
