@@ -319,26 +319,38 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
                 return snapshot_json(s, id);
               }));
   });
-  // the skinned mesh, once per session: it never changes, so the browser keeps it (ETag)
+  // the skinned mesh, once per session: it never changes, so the browser keeps it (an ETag from
+  // the session and the mesh's counts; encoded only when the browser does not have it)
   http.Get(
       R"(/api/sessions/([^/]+)/mesh)", [&ctx](const httplib::Request& req, httplib::Response& res) {
         const auto actor = session_of(ctx, req, res);
         if (!actor) return;
-        const auto bytes = actor->call_within(ctx.call_timeout, [](animator::Session& s) {
-          return s.skin() ? std::make_shared<std::string>(encode_mesh_binary(*s.skin()))
-                          : std::shared_ptr<std::string>();
-        });
-        if (!bytes)
+        struct Answer {
+          bool skinned = false;
+          std::string etag;
+          std::string bytes;  // empty when the browser's copy is current
+        };
+        const Answer a = actor->call_within(
+            ctx.call_timeout,
+            [id = actor->id(), seen = req.get_header_value("If-None-Match")](animator::Session& s) {
+              Answer out;
+              if (!s.skin()) return out;
+              out.skinned = true;
+              out.etag = "\"" + id + "-" + std::to_string(s.skin()->positions.size()) + "-" +
+                         std::to_string(s.skin()->triangles.size()) + "\"";
+              if (seen != out.etag) out.bytes = encode_mesh_binary(*s.skin());
+              return out;
+            });
+        if (!a.skinned)
           return send_error(res, 404, "mesh: this session's character has no skinned mesh");
-        const std::string etag = "\"" + actor->id() + "-" + std::to_string(bytes->size()) + "\"";
-        res.set_header("ETag", etag);
+        res.set_header("ETag", a.etag);
         res.set_header("Cache-Control", "private, no-cache");
-        if (req.get_header_value("If-None-Match") == etag) {
+        if (a.bytes.empty()) {
           res.status = 304;
           return;
         }
         res.status = 200;
-        res.set_content(*bytes, "application/octet-stream");
+        res.set_content(a.bytes, "application/octet-stream");
       });
   http.Post(
       R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {

@@ -1,27 +1,18 @@
 // `pindrag retarget` run as the executable: output clip, report, and field-named refusals.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/fixtures/run_pindrag.hpp"
 
 namespace {
 
-struct Outcome {
-  int status = -1;
-  std::string err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fixtures::Outcome;
+using fixtures::slurp;
 
 struct Dir {
   std::filesystem::path path =
@@ -32,10 +23,7 @@ struct Dir {
 };
 
 Outcome pindrag(const Dir& dir, const std::string& args) {
-  const std::string err = dir.file("stderr.txt");
-  const std::string cmd = std::string(PINDRAG_EXE) + " " + args + " >/dev/null 2>" + err;
-  const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err)};
+  return fixtures::run_pindrag(PINDRAG_EXE, dir.path.string(), args);
 }
 
 std::string mixamo() { return fixtures::data_dir() + "/bvh/mixamo_naming_freebvh.bvh"; }

@@ -52,6 +52,14 @@ async function switchedFrom(page, from) {
   return { ...s, snapshot: await server.snapshot(s.id, s.token) };
 }
 
+/** Picks a character file of one's own in the Open dialog (a BVH read in `units`). */
+async function openFileFromDialog(page, file, units = 'auto') {
+  await page.click('#open-character');
+  await page.waitForSelector('#open-dialog:not([hidden]) #open-file');
+  await page.selectOption('#open-units', units);
+  await page.setInputFiles('#open-character-file', file);
+}
+
 const storedIds = async () => (await (await fetch(`${server.url}api/sessions`)).json()).map((r) => r.id);
 
 test('Open… opens a bundled character, a file of one’s own and a saved session, keeping the one left', async () => {
@@ -95,9 +103,7 @@ test('Open… opens a bundled character, a file of one’s own and a saved sessi
       ],
     }),
   );
-  await page.click('#open-character');
-  await page.waitForSelector('#open-dialog:not([hidden]) #open-file');
-  await page.setInputFiles('#open-character-file', file);
+  await openFileFromDialog(page, file);
   const third = await switchedFrom(page, second.id);
   assert.deepEqual(
     third.snapshot.character.links.map((l) => l.name),
@@ -123,9 +129,7 @@ test('a malformed character file is refused naming the file; the session stays',
   const file = path.join(out, 'broken.bvh');
   fs.writeFileSync(file, 'HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n');
   const storedBefore = await storedIds();
-  await page.click('#open-character');
-  await page.waitForSelector('#open-dialog:not([hidden]) #open-file');
-  await page.setInputFiles('#open-character-file', file);
+  await openFileFromDialog(page, file);
   await page.waitForFunction(() => /422/.test(document.querySelector('#open-dialog .open-status')?.textContent || ''), null, {
     timeout: 20000,
   });
@@ -186,10 +190,7 @@ test('a BVH character opens in the unit guessed from its height, or in the unit 
   const heights = {};
   for (const units of ['auto', 'm']) {
     const from = await sessionOf(page);
-    await page.click('#open-character');
-    await page.waitForSelector('#open-dialog:not([hidden]) #open-units');
-    await page.selectOption('#open-units', units);
-    await page.setInputFiles('#open-character-file', file);
+    await openFileFromDialog(page, file, units);
     const opened = await switchedFrom(page, from.id);
     heights[units] = { height: opened.snapshot.character.height, unit: opened.snapshot.character.unit };
   }

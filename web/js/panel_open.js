@@ -5,7 +5,7 @@
 // It also asks what to do with a clip whose skeleton differs from the character's ("Load clip…"):
 // open it as its own character, retarget it onto this one, or leave it.
 
-import { h } from './panel_util.js';
+import { h, uploadTooLarge } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
 
 const ACCEPTED_CHARACTERS = '.urdf,.json,.bvh,.glb,.gltf,.fbx,.dae';
@@ -64,9 +64,9 @@ export function createOpenDialog(state, api, switchSession) {
       const file = input.files[0];
       input.value = '';
       if (!file) return;
-      const limit = state.config?.limits?.upload_bytes;
-      if (limit && file.size > limit) {
-        notify(`${file.name}: ${(file.size / 2 ** 20).toFixed(1)} MiB, over the ${(limit / 2 ** 20).toFixed(0)} MiB upload limit`, 'error');
+      const tooLarge = uploadTooLarge(state, file);
+      if (tooLarge) {
+        notify(tooLarge, 'error');
         return;
       }
       openCreated(api.createSessionFromFile(file, units.value), file.name);

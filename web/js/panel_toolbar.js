@@ -1,7 +1,7 @@
 // The top bar: the character, Open…, undo/redo, pin mode, gizmo mode, clip upload, export buttons
 // and the connection badge.
 
-import { h } from './panel_util.js';
+import { h, uploadTooLarge } from './panel_util.js';
 import { PIN_MODES, EXPORT_FORMATS } from './protocol.js';
 
 const ACCEPTED_CLIPS = '.bvh,.glb,.gltf,.fbx,.dae';
@@ -51,9 +51,9 @@ export function createToolbar(state, api, connection, actions, openDialog) {
     const file = fileInput.files[0];
     fileInput.value = '';
     if (!file) return;
-    const limit = state.config?.limits?.upload_bytes;
-    if (limit && file.size > limit) {
-      signals.notify.dispatch({ text: `${file.name}: ${(file.size / 2 ** 20).toFixed(1)} MiB, over the ${(limit / 2 ** 20).toFixed(0)} MiB upload limit`, kind: 'error' });
+    const tooLarge = uploadTooLarge(state, file);
+    if (tooLarge) {
+      signals.notify.dispatch({ text: tooLarge, kind: 'error' });
       return;
     }
     uploadButton.disabled = true;

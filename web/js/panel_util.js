@@ -33,3 +33,10 @@ export function panel(className, title, open = true) {
 export function fmt(x, digits = 1) {
   return Number.isFinite(x) ? x.toFixed(digits) : '–';
 }
+
+/** Why `file` cannot be uploaded to this server (over its largest upload cap), or null. */
+export function uploadTooLarge(state, file) {
+  const limit = state.config?.limits?.upload_bytes;
+  if (!limit || file.size <= limit) return null;
+  return `${file.name}: ${(file.size / 2 ** 20).toFixed(1)} MiB, over the ${(limit / 2 ** 20).toFixed(0)} MiB upload limit`;
+}
