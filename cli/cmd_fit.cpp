@@ -26,7 +26,7 @@ namespace {
 struct FitArgs {
   std::string trial, character = "human48", markers, static_range, out, report, report_html, scaled;
   bool no_ranges = false;
-  int threads = 0;  // the trial's fit: 0 = one per core
+  int threads = 1;  // the trial's fit: 0 = one per core
 };
 
 // "--static a:b" (frames, b exclusive), "all" or "none"; empty: the first second.
@@ -146,8 +146,11 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--scaled-character", args->scaled,
                   "the calibrated (segment-scaled) character (JSON)");
   cmd->add_option("--threads", args->threads,
-                  "threads fitting a long trial in chunks (0: one per core; a chunk needs " +
-                      std::to_string(ik::kMinChunkFrames) + " frames)")
+                  "threads fitting a long trial in chunks (default 1; 0: one per core; a chunk "
+                  "needs " +
+                      std::to_string(ik::kMinChunkFrames) +
+                      " frames; a chunk that settles on another fit than one pass is fitted "
+                      "again)")
       ->check(CLI::Range(0, 256));
   cmd->add_flag("--no-ranges", args->no_ranges,
                 "let joints leave their ranges (the figure's ranges are clinical norms)");

@@ -58,13 +58,13 @@ struct MarkerFitSettings {
   // markers do not see (a spine or neck without markers, a toe) from drifting (0: none)
   double reference_weight = 0.0;
   // fit_trajectories: threads that fit a long trial in contiguous chunks (0: one per core). A
-  // chunk starts kChunkLeadIn frames early, from the rest pose placed on the markers, and keeps
-  // only its own frames, so each of them is warm-started as in a single pass.
+  // chunk starts chunk_lead_in frames early, from the rest pose placed on the markers, and keeps
+  // only its own frames, so each of them is warm-started as in a single pass. A chunk whose first
+  // frame is not the fit the chunk before it reaches there (inside the ranges a lead-in can
+  // settle on another solution) is fitted again from that chunk's end.
   int threads = 1;
+  int chunk_lead_in = 30;  // frames fitted before a chunk's first one and discarded (warm-up)
 };
-
-/// Frames a chunk of fit_trajectories fits before its first one and discards (warm-up).
-constexpr int kChunkLeadIn = 30;
 /// Fewest frames per thread worth a chunk of its own.
 constexpr int kMinChunkFrames = 200;
 
@@ -131,6 +131,7 @@ struct MarkerFitResult {
   std::vector<MarkerStats> markers;  // per marker of the set
   double mean_error = 0;             // mean over all fitted samples (m)
   double microseconds_per_frame = 0;
+  int refitted_chunks = 0;  // chunks fitted again from the end of the one before (threads > 1)
 };
 
 /// Fits every frame of `trajectories` (markers in the order of the set), warm-starting each

@@ -45,31 +45,52 @@ void finish_stats(const MarkerTrajectories& t, MarkerFitResult& r) {
   r.mean_error = samples > 0 ? sum / samples : 0.0;
 }
 
-// Fits frames [first, last) into r (r.clip.frames holds every fitted pose, the lead-in's too,
-// which only this pass writes), starting `lead_in` frames earlier from the rest pose placed on
-// the markers; the kept frames' marker sums and maxima go to `stats`, and `done` counts them.
-void fit_range(const core::Model& model,
-               const MarkerSet& set,
-               const MarkerTrajectories& t,
-               const MarkerFitSettings& settings,
-               int first,
-               int last,
-               int lead_in,
-               std::vector<Eigen::VectorXd>& frames,
-               std::vector<FrameFit>& fits,
-               std::vector<MarkerStats>& stats,
-               std::atomic<int>& done) {
+// Where a chunk of fit_trajectories starts from, and what it leaves at its end.
+struct ChunkStart {
+  int lead_in = 0;  // frames fitted from the rest pose before `first` and discarded (warm-up)
+  // instead of a lead-in: continue from the poses already in `frames` before `first`, as one
+  // pass would (`started`: whether any of those frames was fitted rather than extrapolated)
+  bool continue_previous = false;
+  bool started = false;
+};
+struct ChunkEnd {
+  bool started = false;   // some frame up to `last` was fitted
+  Eigen::VectorXd seam;   // the pose this chunk fits at frame `last` (empty at the trial's end)
+  Eigen::VectorXd entry;  // the lead-in's pose at frame `first` − 1 (empty without a lead-in)
+};
+
+// Fits frames [first, last) into `frames` and `fits`, warm-started frame after frame; the kept
+// frames' marker sums and maxima go to `stats`, and `done` counts them. Past `last` it fits one
+// more frame, kept aside in the result, so that the next chunk can be checked against it.
+ChunkEnd fit_range(const core::Model& model,
+                   const MarkerSet& set,
+                   const MarkerTrajectories& t,
+                   const MarkerFitSettings& settings,
+                   int first,
+                   int last,
+                   const ChunkStart& from,
+                   std::vector<Eigen::VectorXd>& frames,
+                   std::vector<FrameFit>& fits,
+                   std::vector<MarkerStats>& stats,
+                   std::atomic<int>& done) {
   MarkerFitter fitter(model, set, settings);
   Eigen::VectorXd q = core::rest_configuration(model);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(model.nv);
-  const int start = std::max(0, first - lead_in);
-  // the lead-in's poses: the previous chunk's last frames, kept aside (that chunk writes them)
-  std::vector<Eigen::VectorXd> lead(first - start);
+  const int start = from.continue_previous ? first : std::max(0, first - from.lead_in);
+  // frames that are not this chunk's own (a lead-in, the seam frame) are kept aside: other
+  // chunks write them; frames before `first` when continuing are read where one pass left them
+  const int history = from.continue_previous ? std::max(0, first - 2) : start;
+  const int stop = std::min(t.frames, last + 1);
+  std::vector<Eigen::VectorXd> aside(first - start + (stop - last));
   const auto pose = [&](int f) -> Eigen::VectorXd& {
-    return f < first ? lead[f - start] : frames[f];
+    if (f >= first && f < last) return frames[f];
+    if (f >= last) return aside[first - start + (f - last)];
+    return from.continue_previous ? frames[f] : aside[f - start];
   };
-  bool started = false;
-  for (int f = start; f < last; ++f) {
+  bool started = from.continue_previous && from.started;
+  if (started) q = frames[first - 1];
+  for (int f = start; f < stop; ++f) {
+    const bool own = f >= first && f < last;
     const core::Vector3* targets = t.frame_positions(f);
     const std::uint8_t* present = t.frame_present(f);
     const int n = fitter.count_present(present);
@@ -78,10 +99,10 @@ void fit_range(const core::Model& model,
     // of the last two frames: q_f = q_{f−1} ⊕ (q_{f−1} ⊖ q_{f−2}) (constant velocity on the
     // manifold), with the frames wherever this pass keeps them
     const auto previous = [&](Eigen::VectorXd& out) {
-      if (f - start >= 2) {
+      if (f - history >= 2) {
         core::difference(model, pose(f - 2), pose(f - 1), v);
         core::integrate(model, pose(f - 1), v, 1.0, out);
-      } else if (f - start == 1) {
+      } else if (f - history == 1) {
         out = pose(f - 1);
       }
     };
@@ -91,18 +112,36 @@ void fit_range(const core::Model& model,
     } else {
       if (!started) fitter.place_root(targets, present, q);
       // warm start: the previous pose, moved on by the previous frame's velocity
-      if (started && settings.predict && f - start >= 2) previous(q);
+      if (started && settings.predict && f - history >= 2) previous(q);
       const int iterations = started ? settings.max_iterations : settings.first_frame_iterations;
       fit = fitter.fit(targets, present, q, iterations);
-      if (f >= first) accumulate(fitter, present, stats);
+      if (own) accumulate(fitter, present, stats);
       started = true;
     }
     pose(f) = q;
-    if (f >= first) {
+    if (own) {
       fits[f] = fit;
       done.fetch_add(1, std::memory_order_relaxed);
     }
   }
+  ChunkEnd end;
+  end.started = started;
+  if (stop > last) end.seam = pose(last);
+  if (start < first) end.entry = pose(first - 1);
+  return end;
+}
+
+// Whether two fits of one frame are the same solution: no coordinate apart by more than
+// kSeamTolerance (rad or m). The fit of a frame can depend on where the frames before it started:
+// inside the joint ranges, and wherever the markers leave a joint free (a wrist's twist, the
+// lumbar/thoracic split) unless a reference weight holds it. A chunk whose lead-in settled
+// elsewhere is fitted again from the end of the chunk before it.
+constexpr double kSeamTolerance = 1e-6;
+
+bool same_solution(const core::Model& model, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd d(model.nv);
+  core::difference(model, a, b, d);
+  return d.lpNorm<Eigen::Infinity>() <= kSeamTolerance;
 }
 
 }  // namespace
@@ -127,10 +166,14 @@ MarkerFitResult fit_trajectories(const core::Model& model,
   std::atomic<int> done{0};
   std::exception_ptr failure;
   std::mutex failure_mutex;
+  std::vector<ChunkEnd> ends(threads);
+  const auto first_of = [&](int k) { return k * t.frames / threads; };
   const auto chunk = [&](int k) {
     try {
-      fit_range(model, set, t, settings, k * t.frames / threads, (k + 1) * t.frames / threads,
-                k == 0 ? 0 : kChunkLeadIn, r.clip.frames, r.frames, stats[k], done);
+      ChunkStart from;
+      from.lead_in = k == 0 ? 0 : settings.chunk_lead_in;
+      ends[k] = fit_range(model, set, t, settings, first_of(k), first_of(k + 1), from,
+                          r.clip.frames, r.frames, stats[k], done);
     } catch (...) {
       std::lock_guard lock(failure_mutex);
       failure = std::current_exception();
@@ -149,6 +192,25 @@ MarkerFitResult fit_trajectories(const core::Model& model,
   }
   for (std::thread& w : workers) w.join();
   if (failure) std::rethrow_exception(failure);
+  // seams, in order: a chunk whose first frame, or the frame before it (the two its warm starts
+  // continue from), is not the solution the chunk before it reaches there is fitted again from
+  // that chunk's end, so every chunk continues the one before it as a single pass would
+  for (int k = 1; k < threads; ++k) {
+    const int first = first_of(k);
+    const ChunkEnd& before = ends[k - 1];
+    const bool agree =
+        !before.started || (before.seam.size() > 0 && ends[k].entry.size() > 0 &&
+                            same_solution(model, before.seam, r.clip.frames[first]) &&
+                            same_solution(model, r.clip.frames[first - 1], ends[k].entry));
+    if (agree) continue;
+    ++r.refitted_chunks;
+    ChunkStart from;
+    from.continue_previous = true;
+    from.started = before.started;
+    std::fill(stats[k].begin(), stats[k].end(), MarkerStats{});
+    ends[k] = fit_range(model, set, t, settings, first, first_of(k + 1), from, r.clip.frames,
+                        r.frames, stats[k], done);
+  }
   if (progress) progress(1.0);
   for (const std::vector<MarkerStats>& s : stats) {
     for (int j = 0; j < t.markers; ++j) {

@@ -163,12 +163,19 @@ TEST(MarkerCalibration, RecoversSegmentScalesAndOffsets) {
 }
 
 // The CMU trial (41 markers, 120 Hz, 810 frames) with the bundled set on human48.
+struct Cmu85_02 {
+  std::shared_ptr<const core::Model> model = core::build_human_figure();
+  ik::MarkerSet set = bundled_set(*model);
+  cli::TrialMarkers markers =
+      cli::markers_from_c3d(io::read_c3d(fixtures::data_dir() + "/c3d/cmu_85_02.c3d"), set);
+};
+
 TEST(MarkerFitReal, Cmu85_02) {
   PINDRAG_REQUIRE_DATA_DIR();
-  const auto model = core::build_human_figure();
-  const ik::MarkerSet set = bundled_set(*model);
-  const io::C3dTrial trial = io::read_c3d(fixtures::data_dir() + "/c3d/cmu_85_02.c3d");
-  const cli::TrialMarkers tm = cli::markers_from_c3d(trial, set);
+  const Cmu85_02 cmu;
+  const auto& model = cmu.model;
+  const ik::MarkerSet& set = cmu.set;
+  const cli::TrialMarkers& tm = cmu.markers;
   EXPECT_TRUE(tm.not_in_trial.empty());
   struct Case {
     const char* name;
@@ -198,14 +205,15 @@ TEST(MarkerFitReal, Cmu85_02) {
 
 // The same trial fitted in two chunks on two threads, each chunk's frames warm-started as in one
 // pass (the second chunk after a lead-in). Without the ranges each frame's fit is unique: the same
-// to a micrometre. Inside the ranges it depends on the path a little (a lead-in that starts
-// elsewhere settles on a neighbouring fit for a while), so there the quality is what must agree.
+// to a micrometre. Inside the ranges a lead-in that starts elsewhere can settle on another
+// solution; the seam check then fits that chunk again from the end of the one before, so the
+// frames agree there too.
 TEST(MarkerFitReal, TwoThreadsFitTheTrialAsOnePassDoes) {
   PINDRAG_REQUIRE_DATA_DIR();
-  const auto model = core::build_human_figure();
-  const ik::MarkerSet set = bundled_set(*model);
-  const io::C3dTrial trial = io::read_c3d(fixtures::data_dir() + "/c3d/cmu_85_02.c3d");
-  const cli::TrialMarkers tm = cli::markers_from_c3d(trial, set);
+  const Cmu85_02 cmu;
+  const auto& model = cmu.model;
+  const ik::MarkerSet& set = cmu.set;
+  const cli::TrialMarkers& tm = cmu.markers;
   ASSERT_GE(tm.trajectories.frames, 2 * ik::kMinChunkFrames);
   for (const bool ranges : {false, true}) {
     ik::MarkerFitSettings one;
@@ -224,15 +232,41 @@ TEST(MarkerFitReal, TwoThreadsFitTheTrialAsOnePassDoes) {
     for (size_t j = 0; j < a.markers.size(); ++j) {
       EXPECT_EQ(a.markers[j].missing, b.markers[j].missing);
     }
-    if (!ranges) {
-      EXPECT_LT(rms, 1e-6) << "largest difference of a frame's RMS error";
-    }
-    EXPECT_NEAR(b.mean_error, a.mean_error, 0.01 * a.mean_error);
+    EXPECT_LT(rms, ranges ? 1e-4 : 1e-6) << "largest difference of a frame's RMS error";
+    EXPECT_NEAR(b.mean_error, a.mean_error, 1e-3 * a.mean_error);
     std::cout << (ranges ? "ranges on" : "ranges off") << ": one thread "
               << a.microseconds_per_frame << " us/frame, two threads " << b.microseconds_per_frame
-              << " us/frame; mean error " << a.mean_error * 1000 << " / " << b.mean_error * 1000
+              << " us/frame (" << b.refitted_chunks << " chunk fitted again); mean error "
+              << a.mean_error * 1000 << " / " << b.mean_error * 1000
               << " mm; largest frame RMS difference " << rms * 1000 << " mm\n";
   }
+}
+
+// A chunk that starts badly (no lead-in, one iteration on its first frame) is caught at its seam
+// and fitted again from the end of the chunk before it: the result is the single pass's, exactly.
+TEST(MarkerFitReal, AChunkThatStartsElsewhereIsFittedAgainFromTheChunkBefore) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  const Cmu85_02 cmu;
+  const auto& model = cmu.model;
+  const ik::MarkerSet& set = cmu.set;
+  const cli::TrialMarkers& tm = cmu.markers;
+  ik::MarkerFitSettings one;
+  one.chunk_lead_in = 0;
+  one.first_frame_iterations = 1;
+  const ik::CalibrationResult c = ik::calibrate_markers(model, set, tm.trajectories, one, {});
+  ik::MarkerFitSettings three = one;
+  three.threads = 3;
+  const ik::MarkerFitResult a = ik::fit_trajectories(*c.model, c.set, tm.trajectories, one);
+  const ik::MarkerFitResult b = ik::fit_trajectories(*c.model, c.set, tm.trajectories, three);
+  EXPECT_EQ(a.refitted_chunks, 0);
+  EXPECT_EQ(b.refitted_chunks, 2);
+  ASSERT_EQ(a.clip.frames.size(), b.clip.frames.size());
+  double apart = 0;
+  for (size_t f = 0; f < a.clip.frames.size(); ++f) {
+    apart = std::max(apart, (a.clip.frames[f] - b.clip.frames[f]).lpNorm<Eigen::Infinity>());
+  }
+  EXPECT_LT(apart, 1e-12) << "largest coordinate difference between the two fits";
+  EXPECT_NEAR(b.mean_error, a.mean_error, 1e-12);
 }
 
 }  // namespace
