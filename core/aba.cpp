@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include "core/hinge.hpp"
 #include "core/kinematics.hpp"
 #include "core/motion_subspace.hpp"
 
@@ -23,19 +24,103 @@ Eigen::Matrix<double, 6, NV> subspace_matrix(const Model& model, int i) {
 // blocks A' = R A Rᵀ, B' = R B Rᵀ, D' = R D Rᵀ give
 //   Ia_P = [A' − (B'P + (B'P)ᵀ) − P D' P,  B' + P D';  (B' + P D')ᵀ,  D']
 // which costs about a third of the two dense 6 x 6 products.
-void add_to_parent(const Transform& X_PC, const Matrix6& Ia, Matrix6& Ia_parent) {
-  const Matrix3& R = X_PC.R;
-  const Matrix3 P = skew(X_PC.p);
-  const Matrix3 A = R * Ia.topLeftCorner<3, 3>() * R.transpose();
-  const Matrix3 B = R * Ia.topRightCorner<3, 3>() * R.transpose();
-  const Matrix3 D = R * Ia.bottomRightCorner<3, 3>() * R.transpose();
-  const Matrix3 PD = P * D;
-  const Matrix3 BP = B * P;
+//
+// add_shifted does the second step from the rotated blocks; a zero p (the coincident axes of a
+// multi-axis joint) leaves them as they are.
+void add_shifted(
+    const Vector3& p, const Matrix3& A, const Matrix3& B, const Matrix3& D, Matrix6& Ia_parent) {
+  if (p.x() == 0 && p.y() == 0 && p.z() == 0) {
+    Ia_parent.topLeftCorner<3, 3>() += A;
+    Ia_parent.topRightCorner<3, 3>() += B;
+    Ia_parent.bottomLeftCorner<3, 3>() += B.transpose();
+    Ia_parent.bottomRightCorner<3, 3>() += D;
+    return;
+  }
+  // products with P = [p×] as cross products: (P X).col(j) = p × X.col(j) and, as Pᵀ = −P,
+  // (X P).row(j) = −(p × X.row(j)ᵀ)ᵀ
+  Matrix3 PD, BP;
+  for (int j = 0; j < 3; ++j) {
+    PD.col(j) = p.cross(D.col(j));
+    BP.row(j) = -p.cross(B.row(j).transpose()).transpose();
+  }
+  Matrix3 PDP;
+  for (int j = 0; j < 3; ++j) PDP.row(j) = -p.cross(PD.row(j).transpose()).transpose();
   const Matrix3 B_parent = B + PD;
-  Ia_parent.topLeftCorner<3, 3>() += A - BP - BP.transpose() - PD * P;
+  Ia_parent.topLeftCorner<3, 3>() += A - BP - BP.transpose() - PDP;
   Ia_parent.topRightCorner<3, 3>() += B_parent;
   Ia_parent.bottomLeftCorner<3, 3>() += B_parent.transpose();
   Ia_parent.bottomRightCorner<3, 3>() += D;
+}
+
+// the whole transform for any joint: rotate the blocks with the full R, then shift
+void add_to_parent(const Transform& X_PC, const Matrix6& Ia, Matrix6& Ia_parent) {
+  const Matrix3& R = X_PC.R;
+  const Matrix3 A = R * Ia.topLeftCorner<3, 3>() * R.transpose();
+  const Matrix3 B = R * Ia.topRightCorner<3, 3>() * R.transpose();
+  const Matrix3 D = R * Ia.bottomRightCorner<3, 3>() * R.transpose();
+  add_shifted(X_PC.p, A, B, D, Ia_parent);
+}
+
+// R M Rᵀ for R a rotation about principal axis K: rotate the columns, then the rows
+template <int K>
+Matrix3 congruence(const AxisRotation<K>& r, const Matrix3& M) {
+  Matrix3 RM;
+  for (int j = 0; j < 3; ++j) RM.col(j) = r.apply(M.col(j));
+  Matrix3 out;
+  for (int j = 0; j < 3; ++j) out.row(j) = r.apply(RM.row(j).transpose()).transpose();
+  return out;
+}
+
+// R M Rᵀ for a symmetric M: only the entries that mix, in the plane of axes k1, k2
+template <int K>
+Matrix3 congruence_symmetric(const AxisRotation<K>& r, const Matrix3& M) {
+  constexpr int k1 = AxisRotation<K>::k1, k2 = AxisRotation<K>::k2;
+  const double c = r.c, s = r.s;
+  const double a = M(k1, k1), b = M(k1, k2), d = M(k2, k2);
+  const double cc = c * c, ss = s * s, cs = c * s;
+  Matrix3 out;
+  out(K, K) = M(K, K);
+  out(K, k1) = out(k1, K) = c * M(K, k1) - s * M(K, k2);
+  out(K, k2) = out(k2, K) = s * M(K, k1) + c * M(K, k2);
+  out(k1, k1) = cc * a - 2 * cs * b + ss * d;
+  out(k2, k2) = ss * a + 2 * cs * b + cc * d;
+  out(k1, k2) = out(k2, k1) = cs * (a - d) + (cc - ss) * b;
+  return out;
+}
+
+// pass 2 for a hinge (S = [e_K; 0]): U = IA S is column K of IA, D its entry K, u = τ − pA_K;
+// then Ia = IA − U Uᵀ / D and pa = pA + Ia c + U u / D go to the parent through the hinge
+// transform, whose rotation is applied to the 3 x 3 blocks directly (RBDA Table 7.1)
+template <int K>
+void articulate_hinge(Data& data, int i, int parent, double tau_i) {
+  const Matrix6& IA = data.IA[i];
+  const Vector6 U = IA.col(K);
+  const double Dinv = 1.0 / U[K];
+  const double u = tau_i - data.pA[i].angular[K];
+  data.U[i].col(0) = U;
+  data.Dinv[i](0, 0) = Dinv;
+  data.u[i][0] = u;
+  if (parent == 0) return;  // nothing above the root needs Ia or pa
+  Matrix6 Ia;
+  for (int c = 0; c < 6; ++c) {
+    const double w = Dinv * U[c];
+    for (int r = 0; r < 6; ++r) Ia(r, c) = IA(r, c) - U[r] * w;
+  }
+  const Motion& cm = data.c[i];
+  const Force& pA = data.pA[i];
+  const double cv[6] = {cm.angular[0], cm.angular[1], cm.angular[2],
+                        cm.linear[0],  cm.linear[1],  cm.linear[2]};
+  const double g = Dinv * u;
+  double pa[6] = {pA.angular[0] + U[0] * g, pA.angular[1] + U[1] * g, pA.angular[2] + U[2] * g,
+                  pA.linear[0] + U[3] * g,  pA.linear[1] + U[4] * g,  pA.linear[2] + U[5] * g};
+  for (int c = 0; c < 6; ++c) {
+    for (int r = 0; r < 6; ++r) pa[r] += Ia(r, c) * cv[c];
+  }
+  const HingeTransform<K> X = HingeTransform<K>::of(data.X_P[i]);
+  add_shifted(X.p, congruence_symmetric(X.r, Ia.topLeftCorner<3, 3>()),
+              congruence(X.r, Ia.topRightCorner<3, 3>()),
+              congruence_symmetric(X.r, Ia.bottomRightCorner<3, 3>()), data.IA[parent]);
+  data.pA[parent] += X.act(Force{Vector3(pa[0], pa[1], pa[2]), Vector3(pa[3], pa[4], pa[5])});
 }
 
 // pass 2 for one joint with NV coordinates: U = IA S, D⁻¹ = (Sᵀ U)⁻¹, u = τ − Sᵀ pA, then the
@@ -104,17 +189,42 @@ const Eigen::VectorXd& aba_impl(const Model& model,
   // pass 1, root to leaves: velocities, velocity-product terms, body inertias and bias forces
   data.v[0] = Motion::Zero();
   for (int i = 1; i < model.njoints; ++i) {
-    data.X_P[i] = joint_transform(model, i, q);
-    const Motion vJ = joint_motion(model, i, v);
-    data.v[i] = data.X_P[i].act_inverse(data.v[model.parent[i]]) + vJ;
-    data.c[i] = data.v[i].cross(vJ);
+    const Motion& v_parent = data.v[model.parent[i]];
+    if (is_hinge(model, i)) {
+      with_axis(model.axis_index[i], [&](auto axis) {
+        constexpr int k = axis();
+        const HingeTransform<k> X{hinge_rotation<k>(model, i, q), model.X_PJ[i].p};
+        const double qd = v[model.idx_v[i]];
+        data.X_P[i] = X.transform();
+        data.v[i] = X.act_inverse(v_parent);
+        data.v[i].angular[k] += qd;
+        data.c[i] = cross_axis<k>(data.v[i], qd);
+      });
+    } else {
+      data.X_P[i] = joint_transform(model, i, q);
+      const Motion vJ = joint_motion(model, i, v);
+      data.v[i] = data.X_P[i].act_inverse(v_parent) + vJ;
+      data.c[i] = data.v[i].cross(vJ);
+    }
     const SpatialInertia& I = model.inertia[i];
-    data.IA[i] = I.matrix();
-    data.pA[i] = cross(data.v[i], I * data.v[i]);
+    if (is_massless(I)) {
+      data.IA[i].setZero();
+      data.pA[i] = Force::Zero();
+    } else {
+      data.IA[i] = I.matrix();
+      data.pA[i] = cross(data.v[i], inertia_times(I, data.v[i]));
+    }
     if (f_ext) data.pA[i] -= (*f_ext)[i];
   }
   // pass 2, leaves to root: articulated inertias and bias forces
   for (int i = model.njoints - 1; i > 0; --i) {
+    if (is_hinge(model, i)) {
+      const int p = model.parent[i];
+      const double tau_i = tau[model.idx_v[i]];
+      with_axis(model.axis_index[i],
+                [&](auto axis) { articulate_hinge<axis()>(data, i, p, tau_i); });
+      continue;
+    }
     Matrix6 Ia;  // the inertia the parent sees, IA − U D⁻¹ Uᵀ (written by articulate*)
     Vector6 pa = data.pA[i].vector();
     switch (joint_nv(model.joint_type[i])) {
@@ -141,6 +251,23 @@ const Eigen::VectorXd& aba_impl(const Model& model,
   // pass 3, root to leaves: accelerations (gravity as an upward acceleration of the world)
   data.a[0] = {Vector3::Zero(), -model.gravity};
   for (int i = 1; i < model.njoints; ++i) {
+    if (is_hinge(model, i)) {
+      // q̈ = D⁻¹ (u − Uᵀ a'), a = a' + e_K q̈
+      with_axis(model.axis_index[i], [&](auto axis) {
+        constexpr int k = axis();
+        Motion a =
+            HingeTransform<k>::of(data.X_P[i]).act_inverse(data.a[model.parent[i]]) + data.c[i];
+        const auto& U = data.U[i];
+        const double Ua =
+            (U(0, 0) * a.angular[0] + U(1, 0) * a.angular[1] + U(2, 0) * a.angular[2]) +
+            (U(3, 0) * a.linear[0] + U(4, 0) * a.linear[1] + U(5, 0) * a.linear[2]);
+        const double qdd = data.Dinv[i](0, 0) * (data.u[i][0] - Ua);
+        data.ddq[model.idx_v[i]] = qdd;
+        a.angular[k] += qdd;
+        data.a[i] = a;
+      });
+      continue;
+    }
     Motion a = data.X_P[i].act_inverse(data.a[model.parent[i]]) + data.c[i];
     switch (joint_nv(model.joint_type[i])) {
       case 1: {

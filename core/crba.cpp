@@ -1,40 +1,52 @@
 #include "core/crba.hpp"
 
+#include "core/hinge.hpp"
+#include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
-#include "core/motion_subspace.hpp"
 
 namespace core {
 
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q) {
-  // composite inertias start as body inertias
+  // Everything in world axes at the world origin (RBDA §6.2 in a single frame): the composite
+  // inertias then add without transforms, and H_ij = S_jᵀ Ic_i S_i for j an ancestor of i is a
+  // dot product with S_j instead of a force transform per ancestor.
+  forward_kinematics(model, q, data.X_P, data.crba_X_W);
+  compute_joint_jacobians(model, data.crba_X_W, data.crba_S);
+  const Matrix6X& S = data.crba_S;
   for (int i = 1; i < model.njoints; ++i) {
-    data.X_P[i] = joint_transform(model, i, q);
-    data.Ic[i] = model.inertia[i];
+    const SpatialInertia& I = model.inertia[i];
+    data.Ic[i] = is_massless(I) ? SpatialInertia::Zero() : I.transformed(data.crba_X_W[i]);
   }
-  // backward pass: fill the rows and columns of each joint, then pass the composite up
+  // backward pass: fill the row and column of each coordinate, then pass the composite up
+  Eigen::MatrixXd& M = data.M;
+  const std::size_t nv = static_cast<std::size_t>(model.nv);
+  const int* parent_v = model.parent_v.data();
   for (int i = model.njoints - 1; i > 0; --i) {
-    const int nvi = joint_nv(model.joint_type[i]);
-    const int ci = model.idx_v[i];
-    for (int d = 0; d < nvi; ++d) {
-      // F = Ic_i S_i,d is the force that accelerates the subtree along this coordinate
-      Force F = data.Ic[i] * subspace_column(model, i, d);
-      subspace_transpose(model, i, F, data.M.col(ci + d).segment(ci, nvi));
-      for (int j = i; model.parent[j] > 0;) {
-        F = data.X_P[j].act(F);
-        j = model.parent[j];
-        const int nvj = joint_nv(model.joint_type[j]);
-        subspace_transpose(model, j, F, data.M.col(ci + d).segment(model.idx_v[j], nvj));
-        data.M.row(ci + d).segment(model.idx_v[j], nvj) =
-            data.M.col(ci + d).segment(model.idx_v[j], nvj).transpose();
+    const SpatialInertia& Ic = data.Ic[i];
+    const int c0 = model.idx_v[i];
+    const int c1 = c0 + joint_nv(model.joint_type[i]);
+    for (int c = c0; c < c1; ++c) {
+      // F = Ic S_c: the force that accelerates the subtree along coordinate c
+      const double* s_c = S.data() + 6 * c;
+      const Force F = inertia_times(Ic, {{s_c[0], s_c[1], s_c[2]}, {s_c[3], s_c[4], s_c[5]}});
+      const double f[6] = {F.angular[0], F.angular[1], F.angular[2],
+                           F.linear[0],  F.linear[1],  F.linear[2]};
+      // H(c, a) = S_aᵀ F for c and every coordinate a above it (its joint's earlier ones too);
+      // the columns of S are contiguous 6-vectors
+      double* M_c = M.data() + c;      // row c: M_c[a * nv] = M(c, a)
+      double* Mc = M.data() + c * nv;  // column c: Mc[a] = M(a, c)
+      for (int a = c; a >= 0; a = parent_v[a]) {
+        const double* s_a = S.data() + 6 * a;
+        const double h = (s_a[0] * f[0] + s_a[1] * f[1] + s_a[2] * f[2]) +
+                         (s_a[3] * f[3] + s_a[4] * f[4] + s_a[5] * f[5]);
+        Mc[a] = h;
+        M_c[a * nv] = h;
       }
     }
-    // the diagonal block is symmetric: mirror it so M is symmetric to the last bit
-    auto block = data.M.block(ci, ci, nvi, nvi);
-    block.triangularView<Eigen::StrictlyUpper>() = block.transpose();
     const int p = model.parent[i];
-    if (p > 0) data.Ic[p] += data.Ic[i].transformed(data.X_P[i]);
+    if (p > 0) data.Ic[p] += Ic;
   }
-  return data.M;
+  return M;
 }
 
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {

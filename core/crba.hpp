@@ -10,7 +10,8 @@ namespace core {
 
 /// Joint-space inertia H(q) with τ = H(q) a + b(q, v). RBDA §6.2; cross-checked against rnea()
 /// columns in tests/core/dynamics_test.cpp (Crba.MatchesRneaColumns).
-/// @return data.M (nv x nv), full symmetric matrix; also fills data.X_P and data.Ic
+/// @return data.M (nv x nv), full symmetric matrix; also fills data.X_P, data.Ic, data.crba_X_W
+///         and data.crba_S (not data.X_W or data.J)
 const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q);
 
 /// Factorizes H = Lᵀ D L exploiting branch-induced sparsity (RBDA §6.5, Table 6.3): L is zero

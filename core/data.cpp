@@ -11,6 +11,8 @@ Data::Data(const Model& model)
       f(model.njoints),
       tau(Eigen::VectorXd::Zero(model.nv)),
       Ic(model.njoints),
+      crba_X_W(model.njoints),
+      crba_S(Matrix6X::Zero(6, model.nv)),
       M(Eigen::MatrixXd::Zero(model.nv, model.nv)),
       LTDL(Eigen::MatrixXd::Zero(model.nv, model.nv)),
       IA(model.njoints, Matrix6::Zero()),

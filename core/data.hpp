@@ -28,9 +28,12 @@ struct Data {
   std::vector<Force> f;  // force transmitted through joint i onto link i's subtree (njoints)
   Eigen::VectorXd tau;   // joint forces                                         (nv)
 
-  // computed by crba
-  std::vector<SpatialInertia> Ic;  // composite inertia of the subtree of i, link frame (njoints)
-  Eigen::MatrixXd M;               // joint-space inertia H(q), symmetric               (nv x nv)
+  // computed by crba; world axes, referenced at the world origin. crba keeps its own poses and
+  // joint axes (the values of X_W and J for its q) so a caller's X_W and J stay untouched.
+  std::vector<SpatialInertia> Ic;   // composite inertia of the subtree of i            (njoints)
+  std::vector<Transform> crba_X_W;  // pose of link i in the world                      (njoints)
+  Matrix6X crba_S;                  // joint motion axes, as J                          (6 x nv)
+  Eigen::MatrixXd M;                // joint-space inertia H(q), symmetric              (nv x nv)
 
   // computed by factorize_mass_matrix: H = Lᵀ D L with the tree's sparsity (RBDA §6.5)
   Eigen::MatrixXd LTDL;  // strictly lower part holds L (unit diagonal), diagonal holds D (nv x nv)

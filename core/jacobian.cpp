@@ -10,10 +10,14 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data, const Ei
 }
 
 const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
-  Matrix6X& J = data.J;
+  compute_joint_jacobians(model, data.X_W, data.J);
+  return data.J;
+}
+
+void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X_W, Matrix6X& J) {
   for (int i = 1; i < model.njoints; ++i) {
-    const Matrix3& R = data.X_W[i].R;
-    const Vector3& p = data.X_W[i].p;
+    const Matrix3& R = X_W[i].R;
+    const Vector3& p = X_W[i].p;
     const int c = model.idx_v[i];
     // a rotation ω about an axis through p moves the world origin with p × ω
     switch (model.joint_type[i]) {
@@ -22,8 +26,10 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
       case JointType::kRevolute: {
         const int k = model.axis_index[i];
         const Vector3 w = k >= 0 ? Vector3(R.col(k)) : Vector3(R * model.axis[i]);
-        J.col(c).head<3>() = w;
-        J.col(c).tail<3>() = p.cross(w);
+        const Vector3 v = p.cross(w);
+        double* Jc = J.data() + 6 * c;  // columns are contiguous 6-vectors
+        Jc[0] = w[0], Jc[1] = w[1], Jc[2] = w[2];
+        Jc[3] = v[0], Jc[4] = v[1], Jc[5] = v[2];
         break;
       }
       case JointType::kPrismatic:
@@ -46,7 +52,6 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data) {
         break;
     }
   }
-  return J;
 }
 
 void point_jacobian(const Model& model,

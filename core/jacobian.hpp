@@ -32,6 +32,9 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data, const Ei
 /// Requires: forward_kinematics(model, data, q).
 const Matrix6X& compute_joint_jacobians(const Model& model, Data& data);
 
+/// The same from the world poses X_W (njoints) into J (6 x nv, sized).
+void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X_W, Matrix6X& J);
+
 /// World-aligned Jacobian of the point p_LinkPoint (link frame) on `link`. Allocation-free when
 /// J_out is already sized (3 x nv).
 /// Requires: compute_joint_jacobians(model, data, q).

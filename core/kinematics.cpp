@@ -3,18 +3,19 @@
 #include <cmath>
 
 #include "core/configuration.hpp"
+#include "core/hinge.hpp"
 
 namespace core {
 
 namespace {
-// R * rotation about principal axis k by angle q (fast path for revolute joints)
-Matrix3 rotate_about_axis(const Matrix3& R, int k, double q) {
-  const double c = std::cos(q), s = std::sin(q);
+// R * (rotation about principal axis K): R's columns k1, k2 mix
+template <int K>
+inline Matrix3 rotate_columns(const Matrix3& R, const AxisRotation<K>& r) {
+  constexpr int k1 = AxisRotation<K>::k1, k2 = AxisRotation<K>::k2;
   Matrix3 out;
-  const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-  out.col(k) = R.col(k);
-  out.col(k1) = c * R.col(k1) + s * R.col(k2);
-  out.col(k2) = -s * R.col(k1) + c * R.col(k2);
+  out.col(K) = R.col(K);
+  out.col(k1) = r.c * R.col(k1) + r.s * R.col(k2);
+  out.col(k2) = r.c * R.col(k2) - r.s * R.col(k1);
   return out;
 }
 }  // namespace
@@ -27,7 +28,11 @@ Transform joint_transform(const Model& model, int i, const Eigen::VectorXd& q) {
       return X;
     case JointType::kRevolute: {
       const int k = model.axis_index[i];
-      if (k >= 0) return {rotate_about_axis(X.R, k, q[iq]), X.p};
+      if (k >= 0) {
+        return with_axis(k, [&](auto axis) -> Transform {
+          return {rotate_columns(X.R, hinge_rotation<axis()>(model, i, q)), X.p};
+        });
+      }
       return {X.R * Eigen::AngleAxisd(q[iq], model.axis[i]).toRotationMatrix(), X.p};
     }
     case JointType::kPrismatic:
@@ -40,25 +45,35 @@ Transform joint_transform(const Model& model, int i, const Eigen::VectorXd& q) {
   return X;
 }
 
+void forward_kinematics(const Model& model,
+                        const Eigen::VectorXd& q,
+                        std::vector<Transform>& X_P,
+                        std::vector<Transform>& X_W) {
+  X_W[0] = Transform::Identity();
+  for (int i = 1; i < model.njoints; ++i) {
+    const Transform& X_WP = X_W[model.parent[i]];
+    if (is_hinge(model, i)) {
+      // the common case: a hinge about a frame axis with an unrotated placement; rotate the
+      // parent's world axes directly instead of composing two 3×3 rotations
+      with_axis(model.axis_index[i], [&](auto axis) {
+        const auto r = hinge_rotation<axis()>(model, i, q);
+        const Vector3& p = model.X_PJ[i].p;
+        X_P[i] = {r.matrix(), p};
+        const Matrix3& R = X_WP.R;
+        X_W[i] = {rotate_columns(R, r),
+                  R.col(0) * p[0] + R.col(1) * p[1] + R.col(2) * p[2] + X_WP.p};
+      });
+    } else {
+      X_P[i] = joint_transform(model, i, q);
+      X_W[i] = X_WP * X_P[i];
+    }
+  }
+}
+
 const std::vector<Transform>& forward_kinematics(const Model& model,
                                                  Data& data,
                                                  const Eigen::VectorXd& q) {
-  data.X_W[0] = Transform::Identity();
-  for (int i = 1; i < model.njoints; ++i) {
-    const Transform& X_WP = data.X_W[model.parent[i]];
-    const int k = model.axis_index[i];
-    if (model.joint_type[i] == JointType::kRevolute && k >= 0 &&
-        model.placement_is_translation[i]) {
-      // the common case: a hinge about a frame axis with an unrotated placement; rotate the
-      // parent's world axes directly instead of composing two 3×3 rotations
-      const double a = q[model.idx_q[i]];
-      data.X_P[i] = {rotate_about_axis(Matrix3::Identity(), k, a), model.X_PJ[i].p};
-      data.X_W[i] = {rotate_about_axis(X_WP.R, k, a), X_WP.R * model.X_PJ[i].p + X_WP.p};
-    } else {
-      data.X_P[i] = joint_transform(model, i, q);
-      data.X_W[i] = X_WP * data.X_P[i];
-    }
-  }
+  forward_kinematics(model, q, data.X_P, data.X_W);
   return data.X_W;
 }
 

@@ -17,6 +17,13 @@ const std::vector<Transform>& forward_kinematics(const Model& model,
                                                  Data& data,
                                                  const Eigen::VectorXd& q);
 
+/// The same into the given arrays (njoints each): X_P[i] pose of link i in its parent, X_W[i] in
+/// the world (for kernels that keep their own poses).
+void forward_kinematics(const Model& model,
+                        const Eigen::VectorXd& q,
+                        std::vector<Transform>& X_P,
+                        std::vector<Transform>& X_W);
+
 /// Poses and spatial velocities (data.v), and the velocity-product accelerations at zero joint
 /// acceleration (data.a_bias, the J̇v term). RBDA Table 3.1 first pass.
 void forward_kinematics(const Model& model,

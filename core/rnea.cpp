@@ -1,11 +1,21 @@
 #include "core/rnea.hpp"
 
+#include "core/hinge.hpp"
 #include "core/kinematics.hpp"
 #include "core/motion_subspace.hpp"
 
 namespace core {
 
 namespace {
+
+// f = I a + v ×* I v (RBDA Table 5.1), zero for a massless body
+template <bool kWithVelocity>
+inline Force body_force(const SpatialInertia& I, const Motion& v, const Motion& a) {
+  if (is_massless(I)) return Force::Zero();
+  Force f = inertia_times(I, a);
+  if constexpr (kWithVelocity) f += cross(v, inertia_times(I, v));
+  return f;
+}
 
 // Shared body of rnea: velocity terms only when `with_velocity`, accelerations only when given.
 template <bool kWithVelocity, bool kWithAcceleration>
@@ -20,28 +30,53 @@ void rnea_passes(const Model& model,
   data.a[0] = {Vector3::Zero(), -model.gravity};
   for (int i = 1; i < model.njoints; ++i) {
     const int p = model.parent[i];
-    data.X_P[i] = joint_transform(model, i, q);
-    data.a[i] = data.X_P[i].act_inverse(data.a[p]);
-    if constexpr (kWithVelocity) {
-      const Motion vJ = joint_motion(model, i, v);
-      data.v[i] = data.X_P[i].act_inverse(data.v[p]) + vJ;
-      data.a[i] += data.v[i].cross(vJ);
+    if (is_hinge(model, i)) {
+      // S = [e_k; 0]: the joint terms are single entries
+      with_axis(model.axis_index[i], [&](auto axis) {
+        constexpr int k = axis();
+        const HingeTransform<k> X{hinge_rotation<k>(model, i, q), model.X_PJ[i].p};
+        data.X_P[i] = X.transform();
+        data.a[i] = X.act_inverse(data.a[p]);
+        if constexpr (kWithVelocity) {
+          const double qd = v[model.idx_v[i]];
+          data.v[i] = X.act_inverse(data.v[p]);
+          data.v[i].angular[k] += qd;
+          data.a[i] += cross_axis<k>(data.v[i], qd);
+        } else {
+          data.v[i] = Motion::Zero();
+        }
+        if constexpr (kWithAcceleration) data.a[i].angular[k] += a[model.idx_v[i]];
+      });
     } else {
-      data.v[i] = Motion::Zero();
+      data.X_P[i] = joint_transform(model, i, q);
+      data.a[i] = data.X_P[i].act_inverse(data.a[p]);
+      if constexpr (kWithVelocity) {
+        const Motion vJ = joint_motion(model, i, v);
+        data.v[i] = data.X_P[i].act_inverse(data.v[p]) + vJ;
+        data.a[i] += data.v[i].cross(vJ);
+      } else {
+        data.v[i] = Motion::Zero();
+      }
+      if constexpr (kWithAcceleration) data.a[i] += joint_motion(model, i, a);
     }
-    if constexpr (kWithAcceleration) data.a[i] += joint_motion(model, i, a);
     // f_i = I_i a_i + v_i ×* I_i v_i − f_ext,i
-    const SpatialInertia& I = model.inertia[i];
-    data.f[i] = I * data.a[i];
-    if constexpr (kWithVelocity) data.f[i] += cross(data.v[i], I * data.v[i]);
+    data.f[i] = body_force<kWithVelocity>(model.inertia[i], data.v[i], data.a[i]);
     if (f_ext) data.f[i] -= (*f_ext)[i];
   }
   // backward pass: τ_i = S_iᵀ f_i, and the parent carries the child's force
   for (int i = model.njoints - 1; i > 0; --i) {
-    subspace_transpose(model, i, data.f[i],
-                       data.tau.segment(model.idx_v[i], joint_nv(model.joint_type[i])));
     const int p = model.parent[i];
-    if (p > 0) data.f[p] += data.X_P[i].act(data.f[i]);
+    if (is_hinge(model, i)) {
+      with_axis(model.axis_index[i], [&](auto axis) {
+        constexpr int k = axis();
+        data.tau[model.idx_v[i]] = data.f[i].angular[k];
+        if (p > 0) data.f[p] += HingeTransform<k>::of(data.X_P[i]).act(data.f[i]);
+      });
+    } else {
+      subspace_transpose(model, i, data.f[i],
+                         data.tau.segment(model.idx_v[i], joint_nv(model.joint_type[i])));
+      if (p > 0) data.f[p] += data.X_P[i].act(data.f[i]);
+    }
   }
 }
 
