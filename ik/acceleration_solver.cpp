@@ -52,7 +52,7 @@ AccelerationSolver::AccelerationSolver(const core::Model& model, const Accelerat
       G1inv_(kMaxDragRows, kMaxDragRows),
       eigen1_(kMaxDragRows),
       t1_(kMaxDragRows),
-      N_(n_, n_),
+      P1_(kMaxDragRows, n_),
       x_(n_),
       acceleration_(Eigen::VectorXd::Zero(model.nv)),
       torque_(Eigen::VectorXd::Zero(model.nv)) {
@@ -200,15 +200,17 @@ void AccelerationSolver::add_row_block(bool top,
   }
   const double row_scale = top ? 1.0 : std::sqrt(weight);
   auto Ablock = A.middleRows(m, rows);
-  // Γ = J_q − J_b X, columns scaled by the joint weights
+  // Γ = J_q − J_b X, columns scaled by the joint weights; a task that does not see the root
+  // (J_b = 0: a joint reference) skips the root's share
+  const bool sees_root = !J.leftCols<6>().isZero(0.0);
   Ablock.noalias() = J.rightCols(n_);
-  Ablock.noalias() -= J.leftCols<6>() * X_;
+  if (sees_root) Ablock.noalias() -= J.leftCols<6>() * X_;
   Ablock = (Ablock.array().rowwise() * col_scale_.transpose().array()) * row_scale;
   auto bblock = b.segment(m, rows);
   bblock.noalias() = 2.0 * frequency * velocity_desired;
   bblock.noalias() -= (2.0 * frequency * J) * v;
   bblock -= jdot_v;
-  bblock.noalias() -= J.leftCols<6>() * y_;
+  if (sees_root) bblock.noalias() -= J.leftCols<6>() * y_;
   bblock *= row_scale;
   m += rows;
 }
@@ -273,12 +275,33 @@ void AccelerationSolver::fill_rows(const Problem& problem,
   }
 }
 
+// Applies the null-space projector of levels 1 and 2 to the rows of A: out = A N, with N kept
+// in factored form, N = E − A1ᵀ P1 − S2ᵀ P2 (P1 = G1⁺ A1, P2 = G2⁻¹ S2), which costs
+// 2 rows · n · (m1 + m2) instead of rows · n² for a dense N.
+void AccelerationSolver::project(const Eigen::Ref<const Eigen::MatrixXd>& A,
+                                 Eigen::Ref<Eigen::MatrixXd> out,
+                                 bool with_level2) {
+  const Eigen::Index rows = A.rows();
+  out = A;
+  const Eigen::Index cols = std::max({n_, m1_, m2_});
+  if (C_.rows() < rows || C_.cols() < cols) C_.resize(std::max(rows, C_.rows()), cols);
+  if (m1_ > 0) {
+    auto C = C_.topLeftCorner(rows, m1_);
+    C.noalias() = A * A1_.topRows(m1_).transpose();
+    out.noalias() -= C * P1_.topRows(m1_);
+  }
+  if (with_level2 && m2_ > 0) {
+    auto C = C_.topLeftCorner(rows, m2_);
+    C.noalias() = A * S2_.topRows(m2_).transpose();
+    out.noalias() -= C * P2_.topRows(m2_);
+  }
+}
+
 void AccelerationSolver::solve_levels() {
   report_.top_rows = m1_;
   report_.range_rows = m2_;
   report_.lower_rows = m3_;
   x_.setZero();
-  N_.setIdentity();
   // level 1, the drag: x = A1ᵀ G⁺ b1 with G = A1 A1ᵀ, damped only where a singular value of A1
   // falls below s0 (λ² = k (1 − σ²/s0²)), and N = E − A1ᵀ G⁺ A1
   if (m1_ > 0) {
@@ -301,10 +324,7 @@ void AccelerationSolver::solve_levels() {
         eigen1_.eigenvectors() * t1_.asDiagonal() * eigen1_.eigenvectors().transpose();
     t1_.noalias() = G1inv_ * b1_.head(m1_);
     x_.noalias() = A1.transpose() * t1_;
-    if (P2_.rows() < m1_ || P2_.cols() != n_) P2_.resize(std::max<int>(m1_, P2_.rows()), n_);
-    auto P = P2_.topRows(m1_);
-    P.noalias() = G1inv_ * A1;
-    N_.noalias() -= A1.transpose() * P;
+    P1_.topRows(m1_).noalias() = G1inv_ * A1;
   }
   // level 2, the ranges: S2 = A2 N, x += S2ᵀ (S2 S2ᵀ + k E)⁻¹ (b2 − A2 x), N −= S2ᵀ G2⁻¹ S2
   if (m2_ > 0) {
@@ -313,7 +333,7 @@ void AccelerationSolver::solve_levels() {
     if (P2_.rows() < m2_ || P2_.cols() != n_) P2_.resize(std::max<int>(m2_, P2_.rows()), n_);
     if (t2_.size() < m2_) t2_.resize(m2_);
     auto S2 = S2_.topRows(m2_);
-    S2.noalias() = A2_.topRows(m2_) * N_;
+    project(A2_.topRows(m2_), S2, false);
     auto G2 = G2_.topLeftCorner(m2_, m2_);
     G2.noalias() = S2 * S2.transpose();
     G2.diagonal().array() += std::max(settings_.range_damping, 1e-12);
@@ -326,7 +346,6 @@ void AccelerationSolver::solve_levels() {
     auto P = P2_.topRows(m2_);
     P = S2;
     llt.solveInPlace(P);
-    N_.noalias() -= S2.transpose() * P;
   }
   // level 3, pins and references: the SR inverse of S3 = A3 N on the residual (Yamane eq. 8.16)
   if (m3_ > 0) {
@@ -334,7 +353,7 @@ void AccelerationSolver::solve_levels() {
     if (r_.size() < m3_) r_.resize(m3_);
     if (y3_.size() != n_) y3_.resize(n_);
     auto S3 = S3_.topRows(m3_);
-    S3.noalias() = A3_.topRows(m3_) * N_;
+    project(A3_.topRows(m3_), S3, true);
     auto r = r_.head(m3_);
     r = b3_.head(m3_);
     r.noalias() -= A3_.topRows(m3_) * x_;

@@ -115,6 +115,9 @@ class AccelerationSolver {
                      double frequency,
                      double weight,
                      const Eigen::VectorXd& v);
+  void project(const Eigen::Ref<const Eigen::MatrixXd>& A,
+               Eigen::Ref<Eigen::MatrixXd> out,
+               bool with_level2);
   void solve_levels();
   bool bound_joint_accelerations(const Eigen::VectorXd& v);
   void hold_at_ranges(const Eigen::VectorXd& v);
@@ -148,8 +151,10 @@ class AccelerationSolver {
   SmallMatrix G1_, G1inv_;
   Eigen::SelfAdjointEigenSolver<SmallMatrix> eigen1_;
   SmallVector t1_;
-  Eigen::MatrixXd N_;             // null-space projector of the levels solved so far (n × n)
+  // the null space of levels 1 and 2, N = E − A1ᵀ P1 − S2ᵀ P2, kept in that factored form
+  Eigen::MatrixXd P1_;            // level 1: G1⁺ A1 (kMaxDragRows × n)
   Eigen::MatrixXd S2_, G2_, P2_;  // level 2: S2 = A2 N, its Gram matrix, G2⁻¹ S2
+  Eigen::MatrixXd C_;             // scratch: rows · A1ᵀ or rows · S2ᵀ
   Eigen::MatrixXd S3_;            // level 3: S3 = A3 N
   Eigen::VectorXd x_, r_, y3_, t2_;
   SrInverse sr_;
