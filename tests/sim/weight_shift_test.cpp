@@ -233,40 +233,70 @@ TEST(WeightShift, WithoutBalanceFeedbackTheSameDragTipsTheFigure) {
   EXPECT_TRUE(fell);
 }
 
-// A drag the figure cannot follow standing (0.3 m down in 2.5 s) makes it fall honestly: every
-// step's contacts push and the root rows hold (step_checked), joint speeds stay bounded, nothing
-// sinks through the ground, and the figure never has more energy than it started with plus the
-// work its joints did (the contacts and the integrator add none: nothing explodes). What follows
-// the fall is chaotic: the joints keep chasing the drag and the pins from the ground, and a drag
-// 1e-9 m deeper changes how high the figure heaves itself (by 75 or 850 mm) and how deep its fall
-// presses into the soft ground (17 to 20 mm). So the invariants are checked on three nearby
-// drags, not the heights of one trajectory.
+// What 9 s of a drag the figure cannot follow standing (0.3 m down in 2.5 s) did.
+struct Fall {
+  double highest = 0;  // the centre of mass's greatest rise over its start (m)
+  double deepest = 0;  // the lowest point of the figure (m, below the ground when negative)
+  double work = 0;     // the joints' work, Σ h τ·v (J)
+  double surplus = 0;  // the most energy the figure had beyond its start plus that work (J)
+  bool fell = false;
+  double joint_speed = 0;  // at the end (rad/s)
+};
+
+// Every step is checked (step_checked: contacts push, the root rows hold) along the way.
+Fall tipping_drag(double depth) {
+  Fall out;
+  DynamicDrag f(depth);
+  core::forward_kinematics(*f.model, f.data, f.q0);
+  const double com0 = core::center_of_mass(*f.model, f.data).y();
+  const double e0 = f.world.energy();
+  while (f.world.time() < 9.0) {
+    f.step_checked();
+    if (::testing::Test::HasFatalFailure()) return out;
+    const sim::Body& body = f.world.body(0);
+    out.work += f.world.settings().step * f.world.pin_solver(0)->torque().dot(body.v);
+    out.surplus = std::max(out.surplus, f.world.energy() - e0 - out.work);
+    out.deepest = std::min(out.deepest, sim::lowest_point_height(*f.model, body.q, {}));
+    out.highest = std::max(out.highest, core::center_of_mass(*f.model, f.data).y() - com0);
+    out.fell = out.fell || !f.standing();
+  }
+  const Eigen::VectorXd& v = f.world.body(0).v;
+  out.joint_speed = v.tail(v.size() - 6).cwiseAbs().maxCoeff();
+  std::printf(
+      "drag %.9f m: centre of mass up to %.1f mm over its start, lowest point %.1f mm, joints' "
+      "work %.0f J, energy beyond it %.3f J\n",
+      depth, 1e3 * out.highest, 1e3 * out.deepest, out.work, out.surplus);
+  return out;
+}
+
+// Three drags 1e-9 and 1e-6 m apart: after the fall the motion is chaotic (the joints keep
+// chasing the drag and the pins from the ground), so the checks are on all three.
+constexpr double kTippingDepths[] = {0.3, 0.3 + 1e-9, 0.3 - 1e-6};
+
+// The drag makes the figure fall honestly: every step's contacts push and the root rows hold,
+// joint speeds stay bounded, nothing sinks through the ground, and the figure never has more
+// energy than it started with plus the work its joints did (the contacts and the integrator add
+// none: nothing explodes). How deep the fall presses into the soft ground varies from drag to
+// drag (17 to 21 mm).
 TEST(WeightShift, ADragThatTipsTheFigureMakesItFallHonestly) {
-  for (const double depth : {0.3, 0.3 + 1e-9, 0.3 - 1e-6}) {
-    DynamicDrag f(depth);
-    core::forward_kinematics(*f.model, f.data, f.q0);
-    const double com0 = core::center_of_mass(*f.model, f.data).y();
-    const double e0 = f.world.energy();
-    double highest = 0, deepest = 0, work = 0, surplus = 0;
-    bool fell = false;
-    while (f.world.time() < 9.0) {
-      ASSERT_NO_FATAL_FAILURE(f.step_checked());
-      const sim::Body& body = f.world.body(0);
-      work += f.world.settings().step * f.world.pin_solver(0)->torque().dot(body.v);
-      surplus = std::max(surplus, f.world.energy() - e0 - work);
-      deepest = std::min(deepest, sim::lowest_point_height(*f.model, body.q, {}));
-      highest = std::max(highest, core::center_of_mass(*f.model, f.data).y() - com0);
-      fell = fell || !f.standing();
-    }
-    std::printf(
-        "drag %.9f m: centre of mass up to %.1f mm over its start, lowest point %.1f mm, joints' "
-        "work %.0f J, energy beyond it %.3f J\n",
-        depth, 1e3 * highest, 1e3 * deepest, work, surplus);
-    EXPECT_LT(surplus, 0.5) << "energy from nowhere, drag " << depth;
-    EXPECT_GT(deepest, -0.025) << "sinks into the ground, drag " << depth;
-    EXPECT_TRUE(fell) << "the drag tips the figure, drag " << depth;
-    const Eigen::VectorXd& v = f.world.body(0).v;
-    EXPECT_LT(v.tail(v.size() - 6).cwiseAbs().maxCoeff(), 25.0 + 1e-9) << "joint speeds bounded";
+  for (const double depth : kTippingDepths) {
+    const Fall fall = tipping_drag(depth);
+    ASSERT_FALSE(HasFatalFailure()) << "drag " << depth;
+    EXPECT_LT(fall.surplus, 0.5) << "energy from nowhere, drag " << depth;
+    EXPECT_GT(fall.deepest, -0.025) << "sinks into the ground, drag " << depth;
+    EXPECT_TRUE(fall.fell) << "the drag tips the figure, drag " << depth;
+    EXPECT_LT(fall.joint_speed, 25.0 + 1e-9) << "joint speeds bounded, drag " << depth;
+  }
+}
+
+// Known shortfall: once fallen, the joints' work can heave the figure's centre of mass far above
+// where it stood (75 mm on one drag, 850 to 2,080 mm on another of these three), honestly paid
+// for by the joints (the test above) but more than a person's muscles could do. Joint strength
+// limits alone (the figure's weight at the reach beyond each joint, 0.4 to 1 times) did not stop
+// it; what would (power limits, or letting go when the figure has fallen) is open.
+TEST(WeightShift, DISABLED_AFallenFigureDoesNotHeaveItselfUp) {
+  for (const double depth : kTippingDepths) {
+    EXPECT_LT(tipping_drag(depth).highest, 0.2) << "drag " << depth;
   }
 }
 
