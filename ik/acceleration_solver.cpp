@@ -183,6 +183,37 @@ void AccelerationSolver::split_root(const core::Data& data,
 
 // One task's rows: J (over all nv coordinates), the velocity-level desired velocity ṙᵈ (at gain
 // K_p / K_v = ω / 2) and J̇v, turned into rows Γ q̈ = 2ω (ṙᵈ − J v) − J̇v − J_b y on a level.
+void AccelerationSolver::reserve_rows(Eigen::MatrixXd& A, Eigen::VectorXd& b, int rows) {
+  if (A.rows() < rows) {
+    A.conservativeResize(std::max<Eigen::Index>(rows, 2 * A.rows()), n_);
+    b.conservativeResize(A.rows());
+  }
+}
+
+// A joint reference's rows: its Jacobian selects the joint's own coordinates (J_b = 0, J̇v = 0),
+// so Γ is that selection and each row has one entry: c_j q̈_j = 2ω (q̇ᵈ_j − q̇_j).
+void AccelerationSolver::add_selection_rows(
+    bool top,
+    int coordinate,
+    int rows,
+    const Eigen::Ref<const Eigen::VectorXd>& velocity_desired,
+    double frequency,
+    double weight,
+    const Eigen::VectorXd& v) {
+  Eigen::MatrixXd& A = top ? A1_ : A3_;
+  Eigen::VectorXd& b = top ? b1_ : b3_;
+  int& m = top ? m1_ : m3_;
+  reserve_rows(A, b, m + rows);
+  const double row_scale = top ? 1.0 : std::sqrt(weight);
+  A.middleRows(m, rows).setZero();
+  for (int d = 0; d < rows; ++d) {
+    const int c = coordinate + d;
+    A(m + d, c) = row_scale * col_scale_[c];
+    b[m + d] = row_scale * 2.0 * frequency * (velocity_desired[d] - v[6 + c]);
+  }
+  m += rows;
+}
+
 void AccelerationSolver::add_row_block(bool top,
                                        const Eigen::Ref<const Eigen::MatrixXd>& J,
                                        const Eigen::Ref<const Eigen::VectorXd>& velocity_desired,
@@ -194,10 +225,7 @@ void AccelerationSolver::add_row_block(bool top,
   Eigen::MatrixXd& A = top ? A1_ : A3_;
   Eigen::VectorXd& b = top ? b1_ : b3_;
   int& m = top ? m1_ : m3_;
-  if (A.rows() < m + rows) {
-    A.conservativeResize(std::max<Eigen::Index>(m + rows, 2 * A.rows()), n_);
-    b.conservativeResize(A.rows());
-  }
+  reserve_rows(A, b, m + rows);
   const double row_scale = top ? 1.0 : std::sqrt(weight);
   auto Ablock = A.middleRows(m, rows);
   // Γ = J_q − J_b X, columns scaled by the joint weights; a task that does not see the root
@@ -241,10 +269,8 @@ void AccelerationSolver::fill_rows(const Problem& problem,
       const int rows = task_rows(m, *r);
       const double w = frequency_or(r->gain, settings_.reference_frequency);
       const ErrorClamp clamp{settings_.max_position_error, settings_.max_orientation_error};
-      J_.topRows(rows).setZero();
       fill_reference_task(m, q, *r, 0.5 * w, clamp, J_.topRows(rows), vd_.head(rows));
-      jdv_.head(rows).setZero();
-      add_row_block(top, J_.topRows(rows), vd_.head(rows), jdv_.head(rows), w, r->weight, v);
+      add_selection_rows(top, m.idx_v[r->joint] - 6, rows, vd_.head(rows), w, r->weight, v);
     }
   }
   // level 2: joints beyond their ranges are pulled back, joints that would leave them within

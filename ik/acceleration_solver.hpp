@@ -108,6 +108,14 @@ class AccelerationSolver {
                  const core::Data& data,
                  const Eigen::VectorXd& q,
                  const Eigen::VectorXd& v);
+  void reserve_rows(Eigen::MatrixXd& A, Eigen::VectorXd& b, int rows);
+  void add_selection_rows(bool top,
+                          int coordinate,
+                          int rows,
+                          const Eigen::Ref<const Eigen::VectorXd>& velocity_desired,
+                          double frequency,
+                          double weight,
+                          const Eigen::VectorXd& v);
   void add_row_block(bool top,
                      const Eigen::Ref<const Eigen::MatrixXd>& J,
                      const Eigen::Ref<const Eigen::VectorXd>& velocity_desired,
