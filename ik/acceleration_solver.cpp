@@ -181,8 +181,6 @@ void AccelerationSolver::split_root(const core::Data& data,
   llt.solveInPlace(y_);
 }
 
-// One task's rows: J (over all nv coordinates), the velocity-level desired velocity ṙᵈ (at gain
-// K_p / K_v = ω / 2) and J̇v, turned into rows Γ q̈ = 2ω (ṙᵈ − J v) − J̇v − J_b y on a level.
 void AccelerationSolver::reserve_rows(Eigen::MatrixXd& A, Eigen::VectorXd& b, int rows) {
   if (A.rows() < rows) {
     A.conservativeResize(std::max<Eigen::Index>(rows, 2 * A.rows()), n_);
@@ -214,6 +212,8 @@ void AccelerationSolver::add_selection_rows(
   m += rows;
 }
 
+// One task's rows: J (over all nv coordinates), the velocity-level desired velocity ṙᵈ (at gain
+// K_p / K_v = ω / 2) and J̇v, turned into rows Γ q̈ = 2ω (ṙᵈ − J v) − J̇v − J_b y on a level.
 void AccelerationSolver::add_row_block(bool top,
                                        const Eigen::Ref<const Eigen::MatrixXd>& J,
                                        const Eigen::Ref<const Eigen::VectorXd>& velocity_desired,
@@ -228,17 +228,15 @@ void AccelerationSolver::add_row_block(bool top,
   reserve_rows(A, b, m + rows);
   const double row_scale = top ? 1.0 : std::sqrt(weight);
   auto Ablock = A.middleRows(m, rows);
-  // Γ = J_q − J_b X, columns scaled by the joint weights; a task that does not see the root
-  // (J_b = 0: a joint reference) skips the root's share
-  const bool sees_root = !J.leftCols<6>().isZero(0.0);
+  // Γ = J_q − J_b X, columns scaled by the joint weights
   Ablock.noalias() = J.rightCols(n_);
-  if (sees_root) Ablock.noalias() -= J.leftCols<6>() * X_;
+  Ablock.noalias() -= J.leftCols<6>() * X_;
   Ablock = (Ablock.array().rowwise() * col_scale_.transpose().array()) * row_scale;
   auto bblock = b.segment(m, rows);
   bblock.noalias() = 2.0 * frequency * velocity_desired;
   bblock.noalias() -= (2.0 * frequency * J) * v;
   bblock -= jdot_v;
-  if (sees_root) bblock.noalias() -= J.leftCols<6>() * y_;
+  bblock.noalias() -= J.leftCols<6>() * y_;
   bblock *= row_scale;
   m += rows;
 }
