@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string_view>
 #include <tuple>
+#include <variant>
 
 #include "animator/floor_contacts.hpp"
 #include "animator/motion_editor.hpp"
@@ -17,6 +18,7 @@
 #include "core/kinematics.hpp"
 #include "core/swing_twist.hpp"
 #include "ik/limits.hpp"
+#include "ik/problem.hpp"
 #include "ik/solver.hpp"
 
 namespace animator {
@@ -680,19 +682,9 @@ RetargetResult retarget(const core::Model& S,
                              .target_R_W = Quaternion(dt.X_W[1].R),
                              .mode = ik::TaskMode::kPose,
                              .weight = kReferenceWeight});
-    for (int j = 2; j < T.njoints; ++j) {
-      const core::JointType type = T.joint_type[j];
-      if (type != core::JointType::kRevolute && type != core::JointType::kPrismatic &&
-          type != core::JointType::kSpherical) {
-        continue;
-      }
-      ik::JointReferenceTask r{.joint = j, .weight = kReferenceWeight};
-      if (type == core::JointType::kSpherical) {
-        r.R_ref = core::quaternion_at(q_ref, T.idx_q[j]);
-      } else {
-        r.q_ref = q_ref[T.idx_q[j]];
-      }
-      problem.add(r);
+    ik::add_joint_references(T, q_ref, problem);
+    for (ik::Problem::Entry& e : problem.entries()) {
+      if (auto* r = std::get_if<ik::JointReferenceTask>(&e.task)) r->weight = kReferenceWeight;
     }
     for (int t : effectors) {
       const bool contact = is_foot[t] && in_hold(f, t);
