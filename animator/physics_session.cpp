@@ -83,6 +83,7 @@ PhysicsMeasures PhysicsSession::measures() const {
   out.cop = b.cop;
   out.support_polygon = b.polygon;
   out.balanced = b.com_supported;
+  out.fallen = world_.fallen(0);
   for (const sim::ContactPair& p : world_.contact_pairs()) {
     if (p.body != 0 || p.partner_body != -1) continue;  // self contact, or another body's
     out.contacts.push_back({p.ref_W, p.wrench.tail<3>()});

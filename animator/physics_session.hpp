@@ -36,6 +36,7 @@ struct PhysicsMeasures {
   std::vector<core::Vector3> support_polygon;  // on the ground plane
   std::vector<ContactArrow> contacts;          // ground contact pairs of the figure
   bool balanced = false;                       // the centre of mass over the support polygon
+  bool fallen = false;  // down: its pins have let go (sim/fall_response.hpp) until an undo
   /// Microseconds each effect cost during the last advance (one displayed frame), by
   /// sim::kAllEffects order, and all of the world's steps together.
   std::array<double, sim::kEffectCount> effect_us{};

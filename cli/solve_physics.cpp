@@ -55,8 +55,11 @@ json measure_frame(const SolveSpec& s, const sim::World& world, core::Data& data
   frame["cop"] = point_or_null(b.cop);
   frame["support_polygon"] = points(b.polygon);
   frame["contact_force"] = b.normal_force;
-  frame["base_residual"] = s.scene.dynamic_pins && pins ? pins->report().root_residual : 0.0;
+  // fallen, forward dynamics moves the figure: its root rows hold by construction
+  const bool driven = s.scene.dynamic_pins && pins && !world.fallen(0);
+  frame["base_residual"] = driven ? pins->report().root_residual : 0.0;
   frame["pelvis"] = point(data.X_W[1].p);
+  frame["fallen"] = world.fallen(0);
   add_task_errors(s, data, frame);
   return frame;
 }

@@ -202,8 +202,8 @@ json physics_json(const animator::PhysicsMeasures& m) {
   }
   return {{"com", vec3(m.com)},         {"cop", m.cop ? vec3(*m.cop) : json(nullptr)},
           {"support_polygon", polygon}, {"contacts", contacts},
-          {"balanced", m.balanced},     {"stage_us", stage_us},
-          {"total_us", m.total_us}};
+          {"balanced", m.balanced},     {"fallen", m.fallen},
+          {"stage_us", stage_us},       {"total_us", m.total_us}};
 }
 
 std::string encode_pose_frame(const animator::Session& s,

@@ -31,8 +31,13 @@ void group_into_pairs(std::vector<ContactPoint>& points, std::vector<ContactPair
     ContactPair& p = pairs.back();
     ++p.point_count;
     p.ref_W += points[k].p_W;
+    p.normal_W += points[k].n_W;
   }
-  for (ContactPair& p : pairs) p.ref_W /= static_cast<double>(p.point_count);
+  for (ContactPair& p : pairs) {
+    p.ref_W /= static_cast<double>(p.point_count);
+    const double n = p.normal_W.norm();
+    if (n > 0) p.normal_W /= n;
+  }
 }
 
 void solve_implicit_wrenches(std::vector<ContactPair>& pairs,
@@ -49,18 +54,36 @@ void solve_implicit_wrenches(std::vector<ContactPair>& pairs,
     ws.x.resize(m);
     ws.lu = Eigen::PartialPivLU<Eigen::MatrixXd>(m);
   }
-  // A = E − h (D + h K) Φ, block row by block row (K and D are per pair)
-  A.setIdentity();
-  for (int i = 0; i < static_cast<int>(pairs.size()); ++i) {
-    const ContactPair& p = pairs[i];
-    const Matrix6 C = h * (p.D + h * p.K);
-    A.middleRows<6>(6 * i).noalias() -= C * Phi.middleRows<6>(6 * i);
-    rhs.segment<6>(6 * i) =
-        p.wrench0 + h * (p.K * p.velocity) + C * free_acceleration.segment<6>(6 * i);
+  const int np = static_cast<int>(pairs.size());
+  ws.released.assign(np, 0);
+  // at most one round per pair: each round lets go of at least one
+  for (int round = 0; round <= np; ++round) {
+    // A = E − h (D + h K) Φ, block row by block row (K and D are per pair); a released pair's
+    // row is τ̂ = 0
+    A.setIdentity();
+    for (int i = 0; i < np; ++i) {
+      const ContactPair& p = pairs[i];
+      if (ws.released[i]) {
+        rhs.segment<6>(6 * i).setZero();
+        continue;
+      }
+      const Matrix6 C = h * (p.D + h * p.K);
+      A.middleRows<6>(6 * i).noalias() -= C * Phi.middleRows<6>(6 * i);
+      rhs.segment<6>(6 * i) =
+          p.wrench0 + h * (p.K * p.velocity) + C * free_acceleration.segment<6>(6 * i);
+    }
+    ws.lu.compute(A);
+    ws.x = ws.lu.solve(rhs);
+    bool pulls = false;
+    for (int i = 0; i < np; ++i) {
+      if (!ws.released[i] && ws.x.segment<3>(6 * i + 3).dot(pairs[i].normal_W) < 0) {
+        ws.released[i] = 1;
+        pulls = true;
+      }
+    }
+    if (!pulls) break;
   }
-  ws.lu.compute(A);
-  ws.x = ws.lu.solve(rhs);
-  for (int i = 0; i < static_cast<int>(pairs.size()); ++i) pairs[i].wrench = ws.x.segment<6>(6 * i);
+  for (int i = 0; i < np; ++i) pairs[i].wrench = ws.x.segment<6>(6 * i);
 }
 
 }  // namespace sim

@@ -32,6 +32,7 @@ struct ContactPair {
   int partner_body = -1, partner_link = 0;  // -1: the environment
   int first_point = 0, point_count = 0;     // into the step's sorted contact points
   core::Vector3 ref_W = core::Vector3::Zero();
+  core::Vector3 normal_W = core::Vector3::Zero();  // its points' mean normal, partner toward link
   Vector6 velocity = Vector6::Zero();  // q̇₀: the link's motion relative to its partner at ref
   Vector6 wrench0 = Vector6::Zero();   // τ₀: the explicit wrench at the step's start
   Matrix6 K = Matrix6::Zero();         // ∂τ/∂q
@@ -49,10 +50,13 @@ struct ImplicitWorkspace {
   Eigen::MatrixXd A;
   Eigen::VectorXd rhs, x;
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  std::vector<char> released;  // per pair: let go because it pulled
 };
 
 /// The implicit contact solve: `Phi` (6P × 6P) and `free_acceleration` (6P, r̂̈) over all P
-/// pairs in order; writes every pair's `wrench`.
+/// pairs in order; writes every pair's `wrench`. The linearized step can ask a pair that is
+/// coming apart fast to pull; such a pair is let go (its wrench 0) and the others solved again,
+/// until none pulls: contacts only push.
 void solve_implicit_wrenches(std::vector<ContactPair>& pairs,
                              const Eigen::MatrixXd& Phi,
                              const Eigen::VectorXd& free_acceleration,

@@ -63,7 +63,8 @@ void World::set_state(int i, const Eigen::VectorXd& q, const Eigen::VectorXd& v)
   }
   b.q = q;
   b.v = v;
-  anchors_.clear();  // a teleported body starts its contacts afresh
+  work_.at(i).fall.reset();  // a figure set on its feet stands again
+  anchors_.clear();          // a teleported body starts its contacts afresh
 }
 
 void World::set_joint_forces(int i, const Eigen::VectorXd& tau) {

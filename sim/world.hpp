@@ -35,6 +35,7 @@
 #include "sim/collision.hpp"
 #include "sim/contact_dynamics.hpp"
 #include "sim/environment.hpp"
+#include "sim/fall_response.hpp"
 #include "sim/scene.hpp"
 #include "sim/settings.hpp"
 #include "sim/shapes.hpp"
@@ -100,6 +101,16 @@ class World {
   const BalanceState& balance_state(int i) const { return work_.at(i).balance.state(); }
   /// The solver of body i after its last dynamic-pins step (torques, report); nullptr when none.
   const ik::AccelerationSolver* pin_solver(int i) const;
+  /// What a dynamically pinned body does once it has fallen (sim/fall_response.hpp).
+  void set_fall_settings(const FallSettings& settings);
+  const FallSettings& fall_settings() const { return fall_settings_; }
+  /// Body i has fallen (its centre of mass low, on the ground): its pins let go until its state
+  /// is set again (set_state).
+  bool fallen(int i) const { return work_.at(i).fall.fallen(); }
+  /// The joint forces the dynamic-pins stage drove body i with in its last step: the pins'
+  /// torques, or once fallen its muscle tone and the drag's spring (with the body's own tau);
+  /// nullptr when the stage did not drive it.
+  const Eigen::VectorXd* driving_forces(int i) const;
 
   // --- what is simulated ------------------------------------------------------------------
   void set_scene(const Scene& scene);
@@ -159,6 +170,8 @@ class World {
     Eigen::VectorXd contact_force;
     core::FrameJacobian handle_jacobian;
     bool pinned = false;  // its accelerations came from the pins this step
+    FallResponse fall;
+    bool falling = false;  // fallen: driven by fall.drive() with fall.diagonal() in its LTDL
     BalanceFeedback balance;
     ik::Problem balanced_pins;  // the pins with the balance feedback's targets
     explicit Work(const core::Model& m) : data(m) {}
@@ -181,6 +194,11 @@ class World {
   void run_contact_forces();
   void run_implicit_contact();
   bool dynamically_pinned(int b) const;
+  bool on_ground(int b) const;  // the ground pushes on body b this step
+  bool has_pins(int b) const;   // dynamic pins on and body b has a problem
+  bool let_go(int b) const;     // has_pins, but body b has fallen: passive, with its tone
+  void prepare_fallen();
+  const Eigen::VectorXd& joint_forces_of(int b) const;  // its drive when fallen, else its tau
   void run_dynamic_pins();
   void contact_joint_forces(int b);
   void run_forward_dynamics();
@@ -215,6 +233,7 @@ class World {
   std::vector<int> implicit_index_;          // their indices in pairs_
   ik::AccelerationSettings pin_settings_;
   BalanceSettings balance_settings_;
+  FallSettings fall_settings_;
   Eigen::MatrixXd Phi_;
   Eigen::VectorXd free_acceleration_;
   // hard limits: rows, H⁻¹ columns and impulses

@@ -162,7 +162,7 @@ void World::run_implicit_contact() {
     core::compute_joint_jacobians(*w.dynamics, w.data);
     core::inverse_operational_inertia(*w.dynamics, w.data, w.handles, w.osim, w.Phi);
     // accelerations of the handles without contact: J H⁻¹ (τ − b) + J̇v
-    w.scratch = bodies_[b].tau - w.bias;
+    w.scratch = joint_forces_of(b) - w.bias;
     core::solve_mass_matrix(*w.dynamics, w.data, w.scratch);
     const int nh = static_cast<int>(w.handles.size());
     for (int h = 0; h < nh; ++h) {
@@ -191,7 +191,15 @@ void World::run_forward_dynamics() {
     Work& w = work_[b];
     const Body& body = bodies_[b];
     if (w.pinned) continue;  // its accelerations came from its pins (run_dynamic_pins)
-    if (w.mass_matrix_ready && !w.handles.empty()) {
+    if (w.falling) {
+      // a fallen figure (sim/fall_response.hpp): H with its tone on the diagonal, factorized by
+      // prepare_fallen; every pair's wrench on it, whether solved implicitly or not
+      contact_joint_forces(b);
+      w.generalized = w.fall.drive() - w.bias + w.contact_force;
+      core::solve_mass_matrix(*w.dynamics, w.data, w.generalized);
+      w.acceleration = w.generalized;
+      w.fall.finish(w.acceleration);
+    } else if (w.mass_matrix_ready && !w.handles.empty()) {
       // a = H⁻¹ (τ − b + Σ ±Jᵀ τ̂), with H factorized for the contact solve
       w.generalized = body.tau - w.bias;
       for (int k = 0; k < static_cast<int>(w.handles.size()); ++k) {

@@ -15,7 +15,8 @@ void World::step_euler() {
     w.mass_matrix_ready = false;
     w.handles.clear();
     w.pinned = false;
-    pins = pins || dynamically_pinned(b);
+    w.falling = false;
+    pins = pins || has_pins(b);
   }
   points_.clear();
   pairs_.clear();
@@ -25,6 +26,10 @@ void World::step_euler() {
   if (scene_.contacts() || pins) {
     run_kinematics();
     clock.lap(TimedPart::kKinematics);
+  }
+  if (pins) {
+    prepare_fallen();
+    clock.lap(TimedPart::kDynamicPins);
   }
   if (scene_.contacts()) {
     run_collision_search();  // times its two searches itself

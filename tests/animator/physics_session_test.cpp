@@ -109,6 +109,37 @@ TEST(PhysicsSession, AfterADragTheFigureStaysBalancedInItsNewPosture) {
   EXPECT_LT(s.physics()->world().kinetic_energy(0), 0.5) << "at rest";
 }
 
+// A drag the figure cannot follow standing tips it over: the measures say it has fallen (its pins
+// let go: sim/fall_response.hpp), and undoing the drag stands it up again where it was.
+TEST(PhysicsSession, AFallenFigureIsReportedAndUndoStandsItUp) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 30, kFrame);
+  const int hand = s.model().link_index("l_hand");
+  const Vector3 hand0 = position(s, "l_hand");
+  const Vector3 pelvis0 = position(s, "pelvis");
+  EXPECT_FALSE(s.physics()->measures().fallen);
+  s.drag_begin(hand, hand0);
+  bool fallen = false;
+  for (int k = 1; k <= 360 && !fallen; ++k) {
+    s.drag_move(hand0 - Vector3(0, 0.6 * std::min(k / 30.0, 1.0), 0));
+    s.tick(kFrame);
+    fallen = s.physics()->measures().fallen;
+  }
+  s.drag_end();
+  ASSERT_TRUE(fallen) << "a 0.6 m drag in 0.5 s tips the figure within 6 s";
+  EXPECT_LT(position(s, "pelvis").y(), pelvis0.y() - 0.3) << "it is down";
+  run(s, 60, kFrame);
+  EXPECT_TRUE(s.physics()->measures().fallen) << "it stays down";
+  ASSERT_TRUE(s.undo());
+  EXPECT_NEAR(position(s, "pelvis").y(), pelvis0.y(), 0.02) << "undo stands it up";
+  for (int k = 0; k < 60; ++k) {
+    s.tick(kFrame);
+    ASSERT_FALSE(s.physics()->measures().fallen) << "tick " << k;
+  }
+  EXPECT_NEAR(position(s, "pelvis").y(), pelvis0.y(), 0.03) << "and it keeps standing";
+}
+
 TEST(PhysicsSession, EffectsOffReturnToKinematicPosingWithoutAJump) {
   Session s(human(), "human48");
   s.set_scene(stand());

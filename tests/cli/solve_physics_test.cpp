@@ -96,6 +96,7 @@ TEST(SolvePhysics, StandingFigureKeepsItsCenterOfPressureInsideItsSupportPolygon
       }
       EXPECT_LT(f["base_residual"].get<double>(), 1e-9);
       EXPECT_TRUE(vector_of(f["pelvis"]).allFinite());
+      EXPECT_FALSE(f["fallen"].get<bool>()) << "it stands";
       EXPECT_GE(f["microseconds"].get<double>(), 0.0);
     }
     EXPECT_EQ(out["final"]["q"].size(), 60u);

@@ -423,6 +423,7 @@ TEST_F(SessionActorTest, PoseFramesCarryThePhysicsWhileItRunsAndNotOtherwise) {
   }
   EXPECT_GT(weight, 100.0);
   EXPECT_TRUE(physics.at("balanced").is_boolean());
+  EXPECT_FALSE(physics.at("fallen").get<bool>()) << "standing";
   for (const char* effect :
        {"gravity", "ground_contact", "friction", "hard_limits", "self_collision", "dynamic_pins"}) {
     EXPECT_TRUE(physics.at("stage_us").at(effect).is_number()) << effect;

@@ -2,12 +2,15 @@
 // frames") while the session simulates: the ground plane, the ground's force at each contact as an
 // arrow (1 mm per newton), the support polygon and the centre of pressure on the ground, the centre
 // of mass with its projection on the ground, and a banner when the centre of mass leaves the
-// support polygon ("Balance lost"). Nothing of this is shown while posing is kinematic.
+// support polygon ("Balance lost") or the figure has fallen and let go. Nothing of this is shown
+// while posing is kinematic.
 
 import * as THREE from 'three';
 import { h } from './panel_util.js';
 
 export const METRES_PER_NEWTON = 0.001;
+const LOST_TEXT = 'Balance lost: the centre of mass is outside the support polygon';
+const FALLEN_TEXT = 'Fallen: the figure has let go of its pins. Undo (Ctrl+Z) stands it up again';
 const LIFT = 0.003; // drawn this far above the ground so it does not flicker with the grid
 const COLORS = { plane: 0x4f7d62, arrow: 0x3fd0f0, polygon: 0x7ee081, cop: 0xff4d4d, com: 0xffd23f, lost: 0xff6b4a };
 
@@ -62,7 +65,7 @@ export function createPhysicsView(state, viewport, stage) {
   const marks = makeGroundMarks();
   group.add(...Object.values(marks));
   const arrows = []; // a pool, grown as contacts appear
-  const banner = h('div.physics-banner#balance-banner', { role: 'status', hidden: true }, 'Balance lost: the centre of mass is outside the support polygon');
+  const banner = h('div.physics-banner#balance-banner', { role: 'status', hidden: true }, LOST_TEXT);
   stage.append(banner);
 
   function arrow(i) {
@@ -95,7 +98,8 @@ export function createPhysicsView(state, viewport, stage) {
 
   function show(physics) {
     group.visible = Boolean(physics);
-    banner.hidden = !physics || physics.balanced;
+    banner.hidden = !physics || (physics.balanced && !physics.fallen);
+    if (physics) banner.textContent = physics.fallen ? FALLEN_TEXT : LOST_TEXT;
     if (!physics) return;
     setContacts(physics.contacts || []);
     setPolygon(marks, physics.support_polygon || []);
