@@ -49,6 +49,24 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorX
   return M;
 }
 
+namespace {
+
+// f(first, count) for each run of consecutive coordinates among k and its ancestors, from k up.
+// Walking runs instead of one parent at a time keeps the loads independent (a limb is one run),
+// so the updates stream through contiguous memory instead of waiting on each parent's index.
+template <typename F>
+inline void for_each_run_from(const Model& model, int k, F&& f) {
+  const int* start = model.chain_start_v.data();
+  const int* parent = model.parent_v.data();
+  for (int j = k; j >= 0;) {
+    const int c = start[j];
+    f(c, j - c + 1);
+    j = parent[c];
+  }
+}
+
+}  // namespace
+
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   const std::vector<int>& lambda = model.parent_v;
   // LTDL (RBDA Table 6.3): eliminate from the leaves up, touching only ancestor pairs. The
@@ -56,37 +74,65 @@ void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   // ancestor of i: walking the ancestors then reads down a column, which is contiguous wherever
   // coordinates are numbered consecutively (limbs, chains), instead of across a row (a cache miss
   // per entry once the matrix outgrows the cache: 2x on a 512-link chain). Same operations,
-  // same results; L goes back to the lower triangle as documented.
+  // same results; L goes back to the lower triangle as documented. The runs are short (a limb),
+  // so they are plain loops: a vectorized segment's set-up costs more than the run.
+  double* const base = H.data();
+  const Eigen::Index stride = H.outerStride();
+  const auto column = [&](int j) { return base + j * stride; };
   for (int k = 1; k < model.nv; ++k) {
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) H(i, k) = H(k, i);
+    if (lambda[k] < 0) continue;
+    double* Hk = column(k);
+    for_each_run_from(model, lambda[k], [&](int c, int n) {
+      for (int j = c; j < c + n; ++j) Hk[j] = column(j)[k];
+    });
   }
   for (int k = model.nv - 1; k >= 0; --k) {
-    double* Hk = &H(0, k);  // Hk[j] = H(k, j) for the ancestors j of k
+    double* const Hk = column(k);  // Hk[j] = H(j, k) for the ancestors j of k
+    const double inv_dk = 1.0 / Hk[k];
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
-      const double a = Hk[i] / Hk[k];
-      double* Hi = &H(0, i);
-      for (int j = i; j >= 0; j = lambda[j]) Hi[j] -= a * Hk[j];
+      // H(j, i) −= a H(j, k) for i and its ancestors j, then H(i, k) = a
+      const double a = Hk[i] * inv_dk;
+      double* const Hi = column(i);
+      for_each_run_from(model, i, [&](int c, int n) {
+        for (int j = c; j < c + n; ++j) Hi[j] -= a * Hk[j];
+      });
       Hk[i] = a;
     }
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) H(k, i) = Hk[i];
+    if (lambda[k] < 0) continue;
+    for_each_run_from(model, lambda[k], [&](int c, int n) {
+      for (int j = c; j < c + n; ++j) column(j)[k] = Hk[j];
+    });
   }
 }
 
+// L(k, i) for the ancestors i of k sits in both triangles after ltdl_factorize; the solves read it
+// down column k (contiguous) as H(i, k).
 void ltdl_solve_lt(const Model& model,
                    const Eigen::Ref<const Eigen::MatrixXd>& L,
                    Eigen::Ref<Eigen::VectorXd> x) {
+  double* const xs = x.data();
   for (int k = model.nv - 1; k >= 0; --k) {
-    const double xk = x[k];
-    if (xk == 0) continue;
-    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[i] -= L(k, i) * xk;
+    const double xk = xs[k];
+    if (xk == 0 || model.parent_v[k] < 0) continue;
+    const double* Lk = L.data() + k * L.outerStride();
+    for_each_run_from(model, model.parent_v[k], [&](int c, int n) {
+      for (int j = c; j < c + n; ++j) xs[j] -= xk * Lk[j];
+    });
   }
 }
 
 void ltdl_solve_l(const Model& model,
                   const Eigen::Ref<const Eigen::MatrixXd>& L,
                   Eigen::Ref<Eigen::VectorXd> x) {
+  double* const xs = x.data();
   for (int k = 0; k < model.nv; ++k) {
-    for (int i = model.parent_v[k]; i >= 0; i = model.parent_v[i]) x[k] -= L(k, i) * x[i];
+    if (model.parent_v[k] < 0) continue;
+    const double* Lk = L.data() + k * L.outerStride();
+    double sum = 0;
+    for_each_run_from(model, model.parent_v[k], [&](int c, int n) {
+      for (int j = c; j < c + n; ++j) sum += Lk[j] * xs[j];
+    });
+    xs[k] -= sum;
   }
 }
 

@@ -21,8 +21,8 @@ void factorize_mass_matrix(const Model& model, Data& data);
 
 /// The same factorization for any symmetric positive definite matrix with the tree's
 /// branch-induced sparsity (entry (i, j) nonzero only when one coordinate is an ancestor of the
-/// other in Model::parent_v): in place, lower triangle read, L and D written over it (the
-/// upper triangle is scratch space and is overwritten).
+/// other in Model::parent_v): in place, lower triangle read, L written over both triangles (the
+/// upper as Lᵀ) and D over the diagonal; the solves below read L from the upper triangle.
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
 /// x ← H⁻¹ x with a matrix factorized by ltdl_factorize.
 void ltdl_solve(const Model& model,

@@ -91,7 +91,7 @@ bool Model::operator==(const Model& o) const {
          spherical_range == o.spherical_range && range_inner == o.range_inner &&
          ik_weight == o.ik_weight && ik_gain == o.ik_gain && inertia == o.inertia &&
          collision == o.collision && visual == o.visual && joint_of_v == o.joint_of_v &&
-         parent_v == o.parent_v;
+         parent_v == o.parent_v && chain_start_v == o.chain_start_v;
 }
 
 }  // namespace core

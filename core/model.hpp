@@ -145,6 +145,9 @@ struct Model {
   // velocity coordinates (nv)
   std::vector<int> joint_of_v;
   std::vector<int> parent_v;  // the velocity coordinate this one hangs from, or -1 (sparse LTDL)
+  // the first coordinate of the unbranched run ending at this one: the ancestors of k are
+  // chain_start_v[k]..k, then those of parent_v[chain_start_v[k]] (runs the LTDL loops stream)
+  std::vector<int> chain_start_v;
 
   /// Index of the link (= its joint) with this link name, or -1.
   int link_index(std::string_view link) const;

@@ -381,6 +381,10 @@ std::shared_ptr<const Model> ModelBuilder::finalize() const {
       if (d > 0) m->parent_v[first + d] = first + d - 1;
     }
   }
+  m->chain_start_v.resize(nv);
+  for (int k = 0; k < nv; ++k) {
+    m->chain_start_v[k] = k > 0 && m->parent_v[k] == k - 1 ? m->chain_start_v[k - 1] : k;
+  }
   // subtree ranges: in depth-first order a subtree ends where the next non-descendant starts
   for (int i = nj - 1; i >= 0; --i) {
     m->subtree_end[i] = std::max(m->subtree_end[i], i + 1);
