@@ -162,24 +162,43 @@ void Solver::solve_pin_level(bool first_round) {
 }
 
 void Solver::factorize_pin_level() {
-  // A = J̃2ᵀ J̃2 + k E (lower triangle), row by row over each row's support, then A = Lᵀ D L
+  // A = J̃2ᵀ J̃2 + k E (lower triangle), then A = Lᵀ D L. The rows of one link task share its
+  // root path: they are gathered along the path into a dense block P (its columns contiguous)
+  // and Pᵀ P added one entry per pair of coordinates instead of one per row and pair.
   Workspace& w = ws_;
   const auto J2 = w.pin_scaled.topRows(w.pin_rows);
   Eigen::MatrixXd& A = w.normal_matrix;
   A.setZero();
-  for (int r = 0; r < w.pin_rows; ++r) {
+  for (int r = 0; r < w.pin_rows;) {
     const int support = w.pin_row_support[r];
     if (support < 0) {
       const int c = -1 - support;
       A(c, c) += J2(r, c) * J2(r, c);
+      ++r;
       continue;
     }
-    const std::vector<int>& cols = w.link_path[support];
-    for (size_t a = 0; a < cols.size(); ++a) {
-      const double ja = J2(r, cols[a]);
-      if (ja == 0) continue;
-      for (size_t c = 0; c <= a; ++c) A(cols[a], cols[c]) += ja * J2(r, cols[c]);
+    int end = r + 1;
+    while (end < w.pin_rows && end - r < w.path_rows.rows() && w.pin_row_support[end] == support) {
+      ++end;
     }
+    const std::vector<int>& cols = w.link_path[support];
+    const int n = static_cast<int>(cols.size());
+    const int m = end - r;
+    auto P = w.path_rows.topLeftCorner(m, n);
+    for (int a = 0; a < n; ++a) P.col(a) = J2.col(cols[a]).segment(r, m);
+    // A(cols[a], cols[c]) += P(:, a) · P(:, c) for c <= a: columns of P are contiguous
+    const Eigen::Index stride = A.outerStride(), p_stride = w.path_rows.outerStride();
+    for (int a = 0; a < n; ++a) {
+      const double* pa = w.path_rows.data() + a * p_stride;
+      double* A_a = A.data() + cols[a];  // row cols[a]: A_a[j * stride] = A(cols[a], j)
+      for (int c = 0; c <= a; ++c) {
+        const double* pc = w.path_rows.data() + c * p_stride;
+        double dot = 0;
+        for (int t = 0; t < m; ++t) dot += pa[t] * pc[t];
+        A_a[cols[c] * stride] += dot;
+      }
+    }
+    r = end;
   }
   const double k = pin_damping();
   report_.lower_damping = k;

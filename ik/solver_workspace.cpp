@@ -66,6 +66,7 @@ Workspace::Workspace(const core::Model& model)
       point_jacobian(model.nv),
       range_flagged(model.njoints, 0),
       normal_matrix(model.nv, model.nv),
+      path_rows(6, model.nv),
       manipulability_pivots(model.nv, model.nv),
       normal_rhs(model.nv),
       half_solved_rhs(model.nv),
