@@ -36,7 +36,6 @@ std::string validate(const FallSettings& s) {
 
 FallResponse::FallResponse(const core::Model& model, const GroundPlane& ground)
     : reach_torque_(Eigen::VectorXd::Zero(model.nv)),
-      mass_beyond_(model.njoints, 0.0),
       drive_(Eigen::VectorXd::Zero(model.nv)),
       diagonal_(Eigen::VectorXd::Zero(model.nv)),
       applied_(Eigen::VectorXd::Zero(model.nv)),
@@ -46,17 +45,15 @@ FallResponse::FallResponse(const core::Model& model, const GroundPlane& ground)
       standing_configuration(model, core::neutral_configuration(model), ground);
   core::forward_kinematics(model, data, q);
   standing_height_ = height_over(ground, core::center_of_mass(model, data));
+  mass_beyond_ = data.subtree_mass;  // filled by center_of_mass
   const double g = model.gravity.norm();
   weight_ = g * model.total_mass();
   for (int j = 1; j < model.njoints; ++j) {
-    double moment = 0, mass = 0;
+    double moment = 0;
     for (int k = j; k < model.subtree_end[j]; ++k) {
       const core::SpatialInertia& I = model.inertia[k];
-      if (I.mass <= 0) continue;
-      mass += I.mass;
-      moment += I.mass * (data.X_W[k] * I.com() - data.X_W[j].p).norm();
+      if (I.mass > 0) moment += I.mass * (data.X_W[k] * I.com() - data.X_W[j].p).norm();
     }
-    mass_beyond_[j] = mass;
     const int nv = core::joint_nv(model.joint_type[j]);
     reach_torque_.segment(model.idx_v[j], nv).setConstant(g * moment);
   }
