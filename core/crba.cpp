@@ -6,49 +6,6 @@
 
 namespace core {
 
-const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q) {
-  // Everything in world axes at the world origin (RBDA §6.2 in a single frame): the composite
-  // inertias then add without transforms, and H_ij = S_jᵀ Ic_i S_i for j an ancestor of i is a
-  // dot product with S_j instead of a force transform per ancestor.
-  forward_kinematics(model, q, data.X_P, data.crba_X_W);
-  compute_joint_jacobians(model, data.crba_X_W, data.crba_S);
-  const Matrix6X& S = data.crba_S;
-  for (int i = 1; i < model.njoints; ++i) {
-    const SpatialInertia& I = model.inertia[i];
-    data.Ic[i] = is_massless(I) ? SpatialInertia::Zero() : I.transformed(data.crba_X_W[i]);
-  }
-  // backward pass: fill the row and column of each coordinate, then pass the composite up
-  Eigen::MatrixXd& M = data.M;
-  const std::size_t nv = static_cast<std::size_t>(model.nv);
-  const int* parent_v = model.parent_v.data();
-  for (int i = model.njoints - 1; i > 0; --i) {
-    const SpatialInertia& Ic = data.Ic[i];
-    const int c0 = model.idx_v[i];
-    const int c1 = c0 + joint_nv(model.joint_type[i]);
-    for (int c = c0; c < c1; ++c) {
-      // F = Ic S_c: the force that accelerates the subtree along coordinate c
-      const double* s_c = S.data() + 6 * c;
-      const Force F = inertia_times(Ic, {{s_c[0], s_c[1], s_c[2]}, {s_c[3], s_c[4], s_c[5]}});
-      const double f[6] = {F.angular[0], F.angular[1], F.angular[2],
-                           F.linear[0],  F.linear[1],  F.linear[2]};
-      // H(c, a) = S_aᵀ F for c and every coordinate a above it (its joint's earlier ones too);
-      // the columns of S are contiguous 6-vectors
-      double* M_c = M.data() + c;      // row c: M_c[a * nv] = M(c, a)
-      double* Mc = M.data() + c * nv;  // column c: Mc[a] = M(a, c)
-      for (int a = c; a >= 0; a = parent_v[a]) {
-        const double* s_a = S.data() + 6 * a;
-        const double h = (s_a[0] * f[0] + s_a[1] * f[1] + s_a[2] * f[2]) +
-                         (s_a[3] * f[3] + s_a[4] * f[4] + s_a[5] * f[5]);
-        Mc[a] = h;
-        M_c[a * nv] = h;
-      }
-    }
-    const int p = model.parent[i];
-    if (p > 0) data.Ic[p] += Ic;
-  }
-  return M;
-}
-
 namespace {
 
 // f(first, count) for each run of consecutive coordinates among k and its ancestors, from k up.
@@ -66,6 +23,52 @@ inline void for_each_run_from(const Model& model, int k, F&& f) {
 }
 
 }  // namespace
+
+const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorXd& q) {
+  // Everything in world axes at the world origin (RBDA §6.2 in a single frame): the composite
+  // inertias then add without transforms, and H_ij = S_jᵀ Ic_i S_i for j an ancestor of i is a
+  // dot product with S_j instead of a force transform per ancestor.
+  forward_kinematics(model, q, data.X_P, data.crba_X_W);
+  compute_joint_jacobians(model, data.crba_X_W, data.crba_S);
+  const Matrix6X& S = data.crba_S;
+  for (int i = 1; i < model.njoints; ++i) {
+    const SpatialInertia& I = model.inertia[i];
+    data.Ic[i] = is_massless(I) ? SpatialInertia::Zero() : I.transformed(data.crba_X_W[i]);
+  }
+  // backward pass: fill the row and column of each coordinate, then pass the composite up
+  Eigen::MatrixXd& M = data.M;
+  const std::size_t nv = static_cast<std::size_t>(model.nv);
+  for (int i = model.njoints - 1; i > 0; --i) {
+    const SpatialInertia& Ic = data.Ic[i];
+    const int c0 = model.idx_v[i];
+    const int c1 = c0 + joint_nv(model.joint_type[i]);
+    for (int c = c0; c < c1; ++c) {
+      // F = Ic S_c: the force that accelerates the subtree along coordinate c
+      const double* s_c = S.data() + 6 * c;
+      const Force F = inertia_times(Ic, {{s_c[0], s_c[1], s_c[2]}, {s_c[3], s_c[4], s_c[5]}});
+      const double f[6] = {F.angular[0], F.angular[1], F.angular[2],
+                           F.linear[0],  F.linear[1],  F.linear[2]};
+      // H(c, a) = S_aᵀ F for c and every coordinate a above it (its joint's earlier ones too),
+      // run by run: the columns S_a of a run are consecutive 6-vectors, H(a, c) is consecutive
+      // down column c, and H(c, a) steps by one column
+      double* const M_data = M.data();
+      for_each_run_from(model, c, [&](int first, int n) {
+        const double* s_a = S.data() + 6 * first;
+        double* column_c = M_data + c * nv + first;  // M(a, c)
+        double* row_c = M_data + first * nv + c;     // M(c, a)
+        for (int k = 0; k < n; ++k, s_a += 6, row_c += nv) {
+          const double h = (s_a[0] * f[0] + s_a[1] * f[1] + s_a[2] * f[2]) +
+                           (s_a[3] * f[3] + s_a[4] * f[4] + s_a[5] * f[5]);
+          column_c[k] = h;
+          *row_c = h;
+        }
+      });
+    }
+    const int p = model.parent[i];
+    if (p > 0) data.Ic[p] += Ic;
+  }
+  return M;
+}
 
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   const std::vector<int>& lambda = model.parent_v;

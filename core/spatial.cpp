@@ -29,16 +29,26 @@ Matrix3 SpatialInertia::inertia_about_com() const {
 
 SpatialInertia SpatialInertia::transformed(const Transform& X_AB) const {
   // rotate about B's origin, then shift the reference point from B's origin to A's origin:
-  // I_A = I' + m(|p|² E - p pᵀ) + 2 (pᵀh') E - (p h'ᵀ + h' pᵀ), h_A = h' + m p
-  const Vector3 h_rot = X_AB.R * h;
-  const Matrix3 I_rot = X_AB.R * I_O * X_AB.R.transpose();
+  // I_A = R I Rᵀ + m(|p|² E - p pᵀ) + 2 (pᵀh') E - (p h'ᵀ + h' pᵀ), h_A = h' + m p, h' = R h.
+  // I_A is symmetric: its six distinct entries are formed and mirrored (45 products for R I Rᵀ
+  // instead of 54, and no 3×3 temporaries for the shift).
+  const Matrix3& R = X_AB.R;
   const Vector3& p = X_AB.p;
+  const Vector3 h_rot = R * h;
+  const Matrix3 RI = R * I_O;
   SpatialInertia out;
   out.mass = mass;
   out.h = h_rot + mass * p;
-  const Matrix3 ph = p * h_rot.transpose();
-  out.I_O = I_rot + mass * (p.squaredNorm() * Matrix3::Identity() - p * p.transpose()) +
-            2.0 * p.dot(h_rot) * Matrix3::Identity() - ph - ph.transpose();
+  const double diagonal_shift = mass * p.squaredNorm() + 2.0 * p.dot(h_rot);
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r <= c; ++r) {
+      const double v = RI(r, 0) * R(c, 0) + RI(r, 1) * R(c, 1) + RI(r, 2) * R(c, 2) -
+                       mass * p[r] * p[c] - (p[r] * h_rot[c] + h_rot[r] * p[c]);
+      out.I_O(r, c) = v;
+      out.I_O(c, r) = v;
+    }
+    out.I_O(c, c) += diagonal_shift;
+  }
   return out;
 }
 
