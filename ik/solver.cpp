@@ -190,8 +190,13 @@ void Solver::fill_rows(const Problem& problem, const core::Data& data, const Eig
       rows = task_rows(m, *reference);
       const double K =
           gain_or(reference->gain, m.ik_gain[reference->joint].value_or(settings_.reference_gain));
-      fill_reference_task(m, q, *reference, K, clamp, J.middleRows(row, rows),
-                          v.segment(row, rows));
+      if (top) {
+        fill_reference_task(m, q, *reference, K, clamp, J.middleRows(row, rows),
+                            v.segment(row, rows));
+      } else {
+        // level 3 keeps selection rows as their coordinate (pin_row_support), not dense rows
+        reference_task_velocity(m, q, *reference, K, clamp, v.segment(row, rows));
+      }
       weight = reference->weight;
     }
     if (!top) {

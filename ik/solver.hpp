@@ -172,6 +172,8 @@ class Solver {
   void solve_range_level();
   void solve_pin_level(bool first_round);
   void factorize_pin_level();
+  /// One past the last level-3 row of the link task whose rows start at row r.
+  int task_rows_end(int r) const;
   double pin_damping();
   void solve_pin_normal_equations();
   void limit_step(double h);

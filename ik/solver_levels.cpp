@@ -143,17 +143,36 @@ void Solver::solve_pin_level(bool first_round) {
     w.x_pin.setZero();
     return;
   }
+  // Every row lives on its link's root path or selects one coordinate (pin_row_support), so
+  // only those entries of J̃2 are formed and read; the rest of pin_scaled is never used.
   auto J2 = w.pin_scaled.topRows(m2);
-  if (first_round) {
-    // scaled rows: rows × √weight, columns × 1/√w
-    J2 = (w.pin_jacobian.topRows(m2).array().rowwise() * w.joint_scale.transpose().array())
-             .colwise() *
-         w.pin_row_scale.head(m2).array();
-  }
-  // Δṗ = ṽ2 − J̃2 x: what levels 1 and 2 leave to this level
+  const auto row_scale = w.pin_row_scale.head(m2);
   auto dp = w.pin_residual.head(m2);
-  dp = w.pin_velocity.head(m2).cwiseProduct(w.pin_row_scale.head(m2));
-  dp.noalias() -= J2 * w.x;
+  // Δṗ = ṽ2 − J̃2 x: what levels 1 and 2 leave to this level
+  dp = w.pin_velocity.head(m2).cwiseProduct(row_scale);
+  for (int r = 0; r < m2;) {
+    const int support = w.pin_row_support[r];
+    if (support < 0) {
+      const int c = -1 - support;
+      // scaled selection row: √weight × 1/√w at its coordinate
+      if (first_round) J2(r, c) = row_scale[r] * w.joint_scale[c];
+      dp[r] -= J2(r, c) * w.x[c];
+      ++r;
+      continue;
+    }
+    const int end = task_rows_end(r);
+    const int m = end - r;
+    for (const int c : w.link_path[support]) {
+      if (first_round) {
+        // scaled rows: rows × √weight, columns × 1/√w
+        J2.col(c).segment(r, m) =
+            w.pin_jacobian.col(c).segment(r, m).cwiseProduct(row_scale.segment(r, m)) *
+            w.joint_scale[c];
+      }
+      dp.segment(r, m) -= J2.col(c).segment(r, m) * w.x[c];
+    }
+    r = end;
+  }
   if (first_round) factorize_pin_level();
   solve_pin_normal_equations();
   report_.lower_solution_norm = w.x_pin.norm();
@@ -177,10 +196,7 @@ void Solver::factorize_pin_level() {
       ++r;
       continue;
     }
-    int end = r + 1;
-    while (end < w.pin_rows && end - r < w.path_rows.rows() && w.pin_row_support[end] == support) {
-      ++end;
-    }
+    const int end = task_rows_end(r);
     const std::vector<int>& cols = w.link_path[support];
     const int n = static_cast<int>(cols.size());
     const int m = end - r;
@@ -205,6 +221,17 @@ void Solver::factorize_pin_level() {
   A.diagonal().array() += k;
   core::ltdl_factorize(model_, A);
   w.constraint_columns = 0;
+}
+
+int Solver::task_rows_end(int r) const {
+  // the rows of one link task follow each other (at most 6, the size of path_rows)
+  const Workspace& w = ws_;
+  const int support = w.pin_row_support[r];
+  int end = r + 1;
+  while (end < w.pin_rows && end - r < w.path_rows.rows() && w.pin_row_support[end] == support) {
+    ++end;
+  }
+  return end;
 }
 
 double Solver::pin_damping() {

@@ -83,10 +83,20 @@ void fill_reference_task(const core::Model& model,
                          Eigen::Ref<Eigen::MatrixXd> J,
                          Eigen::Ref<Eigen::VectorXd> v) {
   const int iv = model.idx_v[t.joint];
-  const int iq = model.idx_q[t.joint];
   const int n = core::joint_nv(model.joint_type[t.joint]);
   J.topRows(n).setZero();
   for (int d = 0; d < n; ++d) J(d, iv + d) = 1.0;  // selection rows (Yamane eqs. 8.17–8.20)
+  reference_task_velocity(model, q, t, K, clamp, v);
+}
+
+void reference_task_velocity(const core::Model& model,
+                             const Eigen::VectorXd& q,
+                             const JointReferenceTask& t,
+                             double K,
+                             const ErrorClamp& clamp,
+                             Eigen::Ref<Eigen::VectorXd> v) {
+  const int iq = model.idx_q[t.joint];
+  const int n = core::joint_nv(model.joint_type[t.joint]);
   if (model.joint_type[t.joint] == JointType::kSpherical) {
     const Quaternion R = core::quaternion_at(q, iq);
     const Vector3 e = core::quaternion_log(R.conjugate() * t.R_ref);

@@ -90,6 +90,8 @@ void fill_link_task(const core::Model& model,
                     Eigen::Ref<Eigen::MatrixXd> J,
                     Eigen::Ref<Eigen::VectorXd> v);
 
+/// Fills the selection rows of a joint reference (one per coordinate of the joint: 1 at the
+/// coordinate, 0 elsewhere) and their desired velocities.
 void fill_reference_task(const core::Model& model,
                          const Eigen::VectorXd& q,
                          const JointReferenceTask& t,
@@ -97,6 +99,14 @@ void fill_reference_task(const core::Model& model,
                          const ErrorClamp& clamp,
                          Eigen::Ref<Eigen::MatrixXd> J,
                          Eigen::Ref<Eigen::VectorXd> v);
+/// The desired velocities of a joint reference alone, for callers that keep selection rows
+/// as coordinate indices instead of dense rows.
+void reference_task_velocity(const core::Model& model,
+                             const Eigen::VectorXd& q,
+                             const JointReferenceTask& t,
+                             double K,
+                             const ErrorClamp& clamp,
+                             Eigen::Ref<Eigen::VectorXd> v);
 
 /// Current error of a link task. Requires: core::forward_kinematics.
 TaskError link_task_error(const core::Data& data, const LinkTask& t);
