@@ -26,6 +26,7 @@ namespace {
 struct FitArgs {
   std::string trial, character = "human48", markers, static_range, out, report, report_html, scaled;
   bool no_ranges = false;
+  double restart_rms = ik::MarkerFitSettings{}.restart_rms;
   int threads = 1;  // the trial's fit: 0 = one per core
 };
 
@@ -94,6 +95,7 @@ void fit(const FitArgs& a) {
     std::cerr << "warning: marker " << n << " is not in " << a.trial << "\n";
   ik::MarkerFitSettings fs;
   fs.enforce_ranges = !a.no_ranges;
+  fs.restart_rms = a.restart_rms;
   ik::CalibrationSettings cs;
   FitReportInput in;
   ClipFile out;
@@ -154,6 +156,10 @@ void add_fit_command(CLI::App& app) {
       ->check(CLI::Range(0, 256));
   cmd->add_flag("--no-ranges", args->no_ranges,
                 "let joints leave their ranges (the figure's ranges are clinical norms)");
+  cmd->add_option("--restart-rms", args->restart_rms,
+                  "inside the ranges, a frame fitted worse than this RMS marker error (m) is "
+                  "fitted again from its unbounded fit (default 0.04; 0: never)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->callback([args] {
     try {
       fit(*args);

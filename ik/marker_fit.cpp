@@ -60,6 +60,8 @@ std::string validate(const MarkerFitSettings& s) {
   if (!std::isfinite(s.damping) || s.damping < 0) return "damping must be finite and >= 0";
   if (!std::isfinite(s.reference_weight) || s.reference_weight < 0)
     return "reference_weight must be finite and >= 0";
+  if (!std::isfinite(s.restart_rms) || s.restart_rms < 0)
+    return "restart_rms must be finite and >= 0";
   if (s.threads < 0) return "threads must be >= 0";
   if (s.chunk_lead_in < 0) return "chunk_lead_in must be >= 0";
   return {};

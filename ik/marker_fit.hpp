@@ -62,6 +62,13 @@ struct MarkerFitSettings {
   // only its own frames, so each of them is warm-started as in a single pass. A chunk whose first
   // frame is not the fit the chunk before it reaches there (inside the ranges a lead-in can
   // settle on another solution) is fitted again from that chunk's end.
+  // inside the joint ranges, a frame fitted with an RMS marker error above restart_rms (m) is
+  // fitted once more from another start: its warm start fitted without the ranges, then brought
+  // inside them. The better of the two fits is kept. After a fast, extreme movement (a kick above
+  // the head, a handstand) the warm start can stay trapped on the wrong side of a range, a leg
+  // a metre off; the unbounded fit finds where the limbs are and the ranges then hold them at
+  // their nearest admissible pose (0: never)
+  double restart_rms = 0.04;
   int threads = 1;
   int chunk_lead_in = 30;  // frames fitted before a chunk's first one and discarded (warm-up)
 };

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "core/configuration.hpp"
@@ -74,6 +75,10 @@ ChunkEnd fit_range(const core::Model& model,
                    std::vector<MarkerStats>& stats,
                    std::atomic<int>& done) {
   MarkerFitter fitter(model, set, settings);
+  // a second start for poorly fitted frames inside the ranges (MarkerFitSettings::restart_rms),
+  // made on first use: the unbounded fit, then the bounded one from there
+  std::optional<MarkerFitter> unbounded, rebounded;
+  Eigen::VectorXd warm_start, second_start;
   Eigen::VectorXd q = core::rest_configuration(model);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(model.nv);
   const int start = from.continue_previous ? first : std::max(0, first - from.lead_in);
@@ -114,8 +119,30 @@ ChunkEnd fit_range(const core::Model& model,
       // warm start: the previous pose, moved on by the previous frame's velocity
       if (started && settings.predict && f - history >= 2) previous(q);
       const int iterations = started ? settings.max_iterations : settings.first_frame_iterations;
+      warm_start = q;
       fit = fitter.fit(targets, present, q, iterations);
-      if (own) accumulate(fitter, present, stats);
+      const MarkerFitter* used = &fitter;
+      if (started && settings.enforce_ranges && settings.restart_rms > 0 &&
+          fit.rms > settings.restart_rms) {
+        if (!unbounded) {
+          MarkerFitSettings free_joints = settings;
+          free_joints.enforce_ranges = false;
+          unbounded.emplace(model, set, free_joints);
+          rebounded.emplace(model, set, settings);
+        }
+        second_start = warm_start;
+        const FrameFit free_fit =
+            unbounded->fit(targets, present, second_start, settings.max_iterations);
+        const FrameFit again =
+            rebounded->fit(targets, present, second_start, settings.max_iterations);
+        fit.iterations += free_fit.iterations + again.iterations;
+        if (again.rms < fit.rms) {
+          fit.rms = again.rms;
+          q = second_start;
+          used = &*rebounded;
+        }
+      }
+      if (own) accumulate(*used, present, stats);
       started = true;
     }
     pose(f) = q;
