@@ -102,18 +102,13 @@ RangeStatus check_range(const SphericalRange& range, const SwingTwist& st) {
   if (range.empty()) return out;
   const Eigen::Vector2d a(st.a_y, st.a_z);
   double best_twist_excess = kInfinity;
-  double swing_distance = kInfinity;
   for (size_t t = 0; t < range.triangles.size(); ++t) {
     const auto& tri = range.triangles[t];
     const Eigen::Vector2d& A = range.swing[tri[0]];
     const Eigen::Vector2d& B = range.swing[tri[1]];
     const Eigen::Vector2d& C = range.swing[tri[2]];
     Eigen::Vector3d l;
-    if (!barycentric(a, A, B, C, l)) {
-      swing_distance = std::min(swing_distance, point_triangle_distance(a, A, B, C));
-      continue;
-    }
-    swing_distance = 0;
+    if (!barycentric(a, A, B, C, l)) continue;
     const double lo = l[0] * range.twist_lower[tri[0]] + l[1] * range.twist_lower[tri[1]] +
                       l[2] * range.twist_lower[tri[2]];
     const double hi = l[0] * range.twist_upper[tri[0]] + l[1] * range.twist_upper[tri[1]] +
@@ -128,7 +123,14 @@ RangeStatus check_range(const SphericalRange& range, const SwingTwist& st) {
     if (excess == 0) break;
   }
   if (out.triangle < 0) {
-    // |a| = sin(φ/2), so a distance d in the swing plane is at least 2d in swing angle
+    // outside every triangle (only then is the distance to the patch needed): |a| = sin(φ/2),
+    // so a distance d in the swing plane is at least 2d in swing angle
+    double swing_distance = kInfinity;
+    for (const auto& tri : range.triangles) {
+      swing_distance = std::min(swing_distance,
+                                point_triangle_distance(a, range.swing[tri[0]], range.swing[tri[1]],
+                                                        range.swing[tri[2]]));
+    }
     out.inside = false;
     out.violation = 2.0 * swing_distance;
     return out;
