@@ -6,6 +6,8 @@
 #include "cli/commands.hpp"
 #include "core/bounds.hpp"
 #include "io/bundled_characters.hpp"
+#include "io/c3d.hpp"
+#include "io/read_file.hpp"
 
 namespace cli {
 
@@ -61,26 +63,63 @@ nlohmann::json clip_summary(const std::string& path) {
   return out;
 }
 
+// a marker trial: timing, units, and each label with the fraction of frames it is missing from
+nlohmann::json c3d_summary(const std::string& path) {
+  const io::C3dTrial t = io::read_c3d(path);
+  nlohmann::json out;
+  out["subject"] = t.subject;
+  out["frames"] = t.frame_count();
+  out["rate_hz"] = t.rate_hz;
+  out["duration"] = t.frame_count() > 0 ? t.time(t.frame_count() - 1) : 0.0;
+  out["units"] = t.units;
+  out["points"] = t.point_count();
+  out["missing_fraction"] = t.missing_fraction();
+  nlohmann::json labels = nlohmann::json::object();
+  for (int p = 0; p < t.point_count(); ++p) {
+    int missing = 0;
+    for (int f = 0; f < t.frame_count(); ++f) missing += !t.is_present(f, p);
+    labels[t.labels[p]] = {
+        {"missing", t.frame_count() > 0 ? static_cast<double>(missing) / t.frame_count() : 0.0}};
+  }
+  out["labels"] = labels;
+  out["warnings"] = t.warnings;
+  return out;
+}
+
+bool is_c3d(const std::string& path) {
+  return path.size() > 4 && (path.compare(path.size() - 4, 4, ".c3d") == 0 ||
+                             path.compare(path.size() - 4, 4, ".C3D") == 0);
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("info",
                                  "print a JSON summary of a character file (or a bundled "
-                                 "character name) or of a clip (.bvh, .gltf, .glb, .fbx, "
-                                 ".dae)");
+                                 "character name), of a clip (.bvh, .gltf, .glb, .fbx, "
+                                 ".dae) or of a marker trial (.c3d)");
   auto file = std::make_shared<std::string>();
-  cmd->add_option("FILE", *file, "character file (.urdf, .json), bundled name, or clip file")
+  cmd->add_option("FILE", *file,
+                  "character file (.urdf, .json), bundled name, clip file, or marker trial")
       ->required();
   cmd->callback([file] {
     nlohmann::json out;
     try {
-      if (clip_format(*file)) {
+      if (is_c3d(*file)) {
+        out = c3d_summary(*file);
+      } else if (clip_format(*file)) {
         out = clip_summary(*file);
       } else {
         const io::LoadResult loaded = io::load_character(*file);
         out = character_summary(*loaded.model, loaded.warnings);
       }
     } catch (const core::ModelError& e) {
+      std::cerr << "pindrag info: " << e.what() << "\n";
+      throw CLI::RuntimeError(1);
+    } catch (const io::C3dError& e) {
+      std::cerr << "pindrag info: " << e.what() << "\n";
+      throw CLI::RuntimeError(1);
+    } catch (const io::FileError& e) {
       std::cerr << "pindrag info: " << e.what() << "\n";
       throw CLI::RuntimeError(1);
     }

@@ -215,6 +215,40 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
   EXPECT_NE(bad.err.find("nothing.bvh"), std::string::npos) << bad.err;
 }
 
+TEST(InfoCommand, MarkerTrialsReportTimingUnitsAndMissingSamplesPerLabel) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  gltf_test::TempDir dir;
+  const Outcome r = pindrag(dir, "info " + fixtures::data_dir() + "/c3d/opensim_walking5.c3d");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  // the trial as the data folder's README describes it: 40 points at 250 Hz, 1103 frames, mm,
+  // 45 % of the samples missing
+  EXPECT_EQ(j.at("frames"), 1103);
+  EXPECT_EQ(j.at("points"), 40);
+  EXPECT_EQ(j.at("rate_hz"), 250.0);
+  EXPECT_EQ(j.at("units"), "mm");
+  EXPECT_NEAR(j.at("missing_fraction").get<double>(), 0.455, 0.005);
+  ASSERT_EQ(j.at("labels").size(), 40u);
+  double sum = 0;
+  for (const auto& [label, v] : j.at("labels").items()) sum += v.at("missing").get<double>();
+  EXPECT_NEAR(sum / 40, j.at("missing_fraction").get<double>(), 1e-12);
+  // the subject prefix is reported once, the labels without it
+  const Outcome c = pindrag(dir, "info " + fixtures::data_dir() + "/c3d/cmu_85_02.c3d");
+  ASSERT_EQ(c.status, 0) << c.err;
+  const json k = json::parse(c.out);
+  EXPECT_EQ(k.at("subject"), "Male");
+  EXPECT_TRUE(k.at("labels").contains("LFWT"));
+  EXPECT_EQ(k.at("labels").at("LFWT").at("missing"), 0.0);
+  // a truncated file is refused with the field named
+  {
+    std::ofstream f(dir.path("short.c3d"), std::ios::binary);
+    f << std::string(100, 'x');
+  }
+  const Outcome bad = pindrag(dir, "info " + dir.path("short.c3d"));
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.err.find("short.c3d: header"), std::string::npos) << bad.err;
+}
+
 // both feet pinned while the right hand is pulled up and forward over half a second
 json walk_script() {
   return {
