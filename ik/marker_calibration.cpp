@@ -17,14 +17,22 @@ namespace {
 std::vector<int> calibration_frames(const MarkerTrajectories& t,
                                     const CalibrationSettings& s,
                                     int min_markers) {
-  const int first = std::clamp(s.first_frame, 0, std::max(0, t.frames - 1));
+  const auto enough_markers = [&](int f) {
+    int n = 0;
+    for (int j = 0; j < t.markers; ++j) n += t.frame_present(f)[j] ? 1 : 0;
+    return n >= min_markers;
+  };
+  int first = std::clamp(s.first_frame, 0, std::max(0, t.frames - 1));
+  if (s.last_frame < 0) {
+    // the default second starts where the subject is first seen (a trial often starts with the
+    // subject outside the capture volume)
+    while (first + 1 < t.frames && !enough_markers(first)) ++first;
+  }
   const int second = std::max(1, static_cast<int>(std::lround(t.rate_hz)));
   const int last = std::clamp(s.last_frame < 0 ? first + second : s.last_frame, first, t.frames);
   std::vector<int> usable;
   for (int f = first; f < last; ++f) {
-    int n = 0;
-    for (int j = 0; j < t.markers; ++j) n += t.frame_present(f)[j] ? 1 : 0;
-    if (n >= min_markers) usable.push_back(f);
+    if (enough_markers(f)) usable.push_back(f);
   }
   if (usable.empty()) {
     throw std::invalid_argument("calibration: no frame in [" + std::to_string(first) + ", " +

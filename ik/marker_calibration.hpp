@@ -22,10 +22,11 @@
 namespace ik {
 
 struct CalibrationSettings {
-  int first_frame = 0;                 // calibration range [first_frame, last_frame)
-  int last_frame = -1;                 // -1: one second after first_frame (at least one frame)
-  int max_frames = 40;                 // frames of the range used (evenly spaced)
-  int rounds = 12;                     // alternations of (a), (b) and (c)
+  int first_frame = 0;  // calibration range [first_frame, last_frame)
+  int last_frame = -1;  // -1: one second from the first frame at or after first_frame that has
+                        // enough markers (at least one frame)
+  int max_frames = 40;  // frames of the range used (evenly spaced)
+  int rounds = 12;      // alternations of (a), (b) and (c)
   double offset_prior = 2.0;           // λ for given offsets, in frames
   bool estimate_given_offsets = true;  // false: only offsets left out of the marker set move
   bool estimate_scales = true;
