@@ -31,15 +31,20 @@ nlohmann::json scale_table(const FitReportInput& in) {
 nlohmann::json fit_report(const FitReportInput& in) {
   const ik::MarkerFitResult& r = *in.result;
   nlohmann::json frames = nlohmann::json::array();
-  int flagged = 0;
+  int flagged = 0, second_starts = 0, second_starts_kept = 0;
   for (const ik::FrameFit& f : r.frames) {
-    frames.push_back({{"rms", f.rms}, {"present", f.present}, {"flagged", f.flagged}});
+    nlohmann::json frame{{"rms", f.rms}, {"present", f.present}, {"flagged", f.flagged}};
+    if (f.second_start) frame["second_start"] = f.second_start_kept ? "kept" : "tried";
+    frames.push_back(std::move(frame));
     flagged += f.flagged ? 1 : 0;
+    second_starts += f.second_start ? 1 : 0;
+    second_starts_kept += f.second_start_kept ? 1 : 0;
   }
   return {{"character", in.model->name},
           {"mean_error", r.mean_error},
           {"frames_fitted", static_cast<int>(r.frames.size()) - flagged},
           {"frames_flagged", flagged},
+          {"second_starts", {{"tried", second_starts}, {"kept", second_starts_kept}}},
           {"markers", marker_table(in)},
           {"not_in_trial", in.not_in_trial},
           {"frames", frames},

@@ -108,6 +108,14 @@ std::string fit_report_html(const nlohmann::json& report, const std::string& tri
           " mm</b> over " + std::to_string(fitted) + " fitted frames (" + std::to_string(flagged) +
           " flagged: too few markers), " + fixed(report.value("us_per_frame", 0.0), 0) +
           " µs per frame.</p>";
+  if (report.contains("second_starts")) {
+    const nlohmann::json& s = report.at("second_starts");
+    html +=
+        "<p>Frames fitted a second time from their unbounded fit (error above the restart "
+        "threshold): " +
+        std::to_string(s.value("tried", 0)) + ", of which " + std::to_string(s.value("kept", 0)) +
+        " kept the second fit.</p>";
+  }
   html +=
       "<h2>Marker error over time</h2><p>RMS over the markers present in each frame; the "
       "dashed line is the mean, red ticks mark flagged frames.</p>" +

@@ -83,6 +83,10 @@ struct FrameFit {
   int present = 0;       // markers present in the frame
   int iterations = 0;    // solver steps taken
   bool flagged = false;  // too few markers: extrapolated from the previous frames
+  // the frame was fitted a second time from its unbounded fit (MarkerFitSettings::restart_rms),
+  // and whether that fit was the better one and kept
+  bool second_start = false;
+  bool second_start_kept = false;
 };
 
 /// Fits frames one at a time; holds the solver, its problem and the kinematics workspace, so

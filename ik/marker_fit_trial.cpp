@@ -136,7 +136,9 @@ ChunkEnd fit_range(const core::Model& model,
         const FrameFit again =
             rebounded->fit(targets, present, second_start, settings.max_iterations);
         fit.iterations += free_fit.iterations + again.iterations;
+        fit.second_start = true;
         if (again.rms < fit.rms) {
+          fit.second_start_kept = true;
           fit.rms = again.rms;
           q = second_start;
           used = &*rebounded;

@@ -126,6 +126,9 @@ TEST_F(FitCommand, FitsASyntheticTrialToABvhAndAReport) {
   EXPECT_EQ(report["markers"]["LKNE"]["link"], "l_thigh");
   EXPECT_GT(report["us_per_frame"].get<double>(), 0);
   EXPECT_NEAR(report["scales"]["l_thigh"].get<double>(), 1.0, 0.02);
+  // a trial this close to the figure never needs a second start
+  EXPECT_EQ(report["second_starts"]["tried"], 0);
+  EXPECT_EQ(report["second_starts"]["kept"], 0);
   EXPECT_TRUE(fs::exists(path("scaled.json")));
   // the page: the plot of the error over time (one line through the fitted frames) and one row
   // per marker of the set
