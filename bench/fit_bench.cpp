@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "cli/c3d_markers.hpp"
+#include "animator/marker_trial.hpp"
 #include "cli/marker_set_file.hpp"
 #include "core/human_figure.hpp"
 #include "ik/marker_calibration.hpp"
@@ -24,8 +24,9 @@ void BM_MarkerFit(benchmark::State& state) {
     return;
   }
   const auto model = core::build_human_figure();
-  const ik::MarkerSet set = cli::read_marker_set_file(cli::bundled_marker_set_path(*model), *model);
-  const cli::TrialMarkers tm = cli::markers_from_c3d(io::read_c3d(trial_path()), set);
+  const ik::MarkerSet set =
+      cli::read_marker_set_file(animator::bundled_marker_set_path(*model), *model);
+  const animator::TrialMarkers tm = animator::markers_from_c3d(io::read_c3d(trial_path()), set);
   ik::MarkerFitSettings fs;
   fs.enforce_ranges = state.range(0) != 0;
   const ik::CalibrationResult c = ik::calibrate_markers(model, set, tm.trajectories, fs);

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
-#include "cli/c3d_markers.hpp"
+#include "animator/marker_trial.hpp"
 #include "cli/clip_file.hpp"
 #include "cli/commands.hpp"
 #include "cli/fit_report.hpp"
@@ -58,7 +58,7 @@ bool parse_static(const std::string& text, int frames, ik::CalibrationSettings& 
 
 ik::MarkerSet load_marker_set(const FitArgs& a, const core::Model& model) {
   std::string path = a.markers;
-  if (path.empty()) path = bundled_marker_set_path(model);
+  if (path.empty()) path = animator::bundled_marker_set_path(model);
   if (path.empty()) {
     throw RequestError("--markers: no bundled marker set for " + model.name +
                        " (rule: give a marker set file)");
@@ -88,7 +88,7 @@ void fit(const FitArgs& a) {
   const std::shared_ptr<const core::Model> model = io::load_character(a.character).model;
   const ik::MarkerSet set = load_marker_set(a, *model);
   const io::C3dTrial trial = io::read_c3d(a.trial);
-  const TrialMarkers tm = markers_from_c3d(trial, set);
+  const animator::TrialMarkers tm = animator::markers_from_c3d(trial, set);
   for (const std::string& w : trial.warnings)
     std::cerr << "warning: " << a.trial << ": " << w << "\n";
   for (const std::string& n : tm.not_in_trial)

@@ -1,26 +1,17 @@
-// Marker set files for `pindrag fit` (docs/marker-fitting.md):
-//   {"markers": {"LASI": {"link": "pelvis", "offset": [x, y, z], "weight": 1}, ...}}
-// "offset" (metres, link frame) may be left out: it is then estimated from the static range and
-// starts at the link origin. "weight" is optional (default 1). Unknown keys are warned about.
+// Marker set files for `pindrag fit` (docs/marker-fitting.md); the format and its checks are
+// animator::parse_marker_set's (animator/marker_trial.hpp).
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <string>
 
+#include "animator/marker_trial.hpp"
 #include "core/model.hpp"
 #include "ik/marker_set.hpp"
 
 namespace cli {
 
-/// The marker set described by `doc` on `model`'s links.
-/// @throws RequestError "<field>: <rule>", e.g. "/markers/LASI/link: no link 'pelvs' in human48"
-ik::MarkerSet parse_marker_set(const nlohmann::json& doc, const core::Model& model);
-
-/// Reads and parses a marker set file. @throws RequestError "<path>: <field>: <rule>"
+/// Reads and parses a marker set file; unknown keys are warned about on stderr.
+/// @throws RequestError "<path>: <field>: <rule>"
 ik::MarkerSet read_marker_set_file(const std::string& path, const core::Model& model);
-
-/// The bundled marker set for the model (characters/markers/cmu41_<model name>.json), or ""
-/// when there is none.
-std::string bundled_marker_set_path(const core::Model& model);
 
 }  // namespace cli

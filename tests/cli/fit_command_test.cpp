@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "animator/marker_trial.hpp"
 #include "cli/commands.hpp"
 #include "cli/json_fields.hpp"
 #include "cli/marker_set_file.hpp"
@@ -110,7 +111,8 @@ class FitCommand : public ::testing::Test {
 
 TEST_F(FitCommand, FitsASyntheticTrialToABvhAndAReport) {
   const auto model = core::build_human_figure();
-  const ik::MarkerSet set = cli::read_marker_set_file(cli::bundled_marker_set_path(*model), *model);
+  const ik::MarkerSet set =
+      cli::read_marker_set_file(animator::bundled_marker_set_path(*model), *model);
   const core::Clip truth = marker_fit_test::smooth_motion(*model, 90, 60.0);
   const ik::MarkerTrajectories t = marker_fit_test::markers_of(*model, set, truth, 0.001, 0.2);
   std::ofstream(path("trial.c3d"), std::ios::binary) << c3d_file(set, t);
@@ -153,10 +155,10 @@ TEST_F(FitCommand, RefusesAMissingTrial) {
 
 TEST(MarkerSetFile, ReadsOffsetsAndLeavesOutOffsetsToEstimate) {
   const auto model = core::build_human_figure();
-  const ik::MarkerSet set = cli::parse_marker_set(nlohmann::json::parse(R"({"markers": {
+  const ik::MarkerSet set = animator::parse_marker_set(nlohmann::json::parse(R"({"markers": {
       "LASI": {"link": "pelvis", "offset": [0.12, 0.07, 0.05]},
       "LKNE": {"link": "l_thigh", "weight": 2}}})"),
-                                                  *model);
+                                                       *model);
   ASSERT_EQ(set.size(), 2);
   const ik::Marker& asi = set.markers[set.find("LASI")];
   EXPECT_EQ(asi.link, model->link_index("pelvis"));
@@ -170,7 +172,7 @@ TEST(MarkerSetFile, BundledSetsHaveTheCmuLabels) {
   for (int dof : {48, 34}) {
     const auto model = core::build_human_figure({.dof = dof});
     const ik::MarkerSet set =
-        cli::read_marker_set_file(cli::bundled_marker_set_path(*model), *model);
+        cli::read_marker_set_file(animator::bundled_marker_set_path(*model), *model);
     EXPECT_EQ(set.size(), 41);
     for (const char* label : {"LFHD", "C7", "RBAC", "LFWT", "RMT5", "LFIN"})
       EXPECT_GE(set.find(label), 0) << label;
@@ -180,8 +182,8 @@ TEST(MarkerSetFile, BundledSetsHaveTheCmuLabels) {
 std::string refusal(const std::string& text) {
   const auto model = core::build_human_figure();
   try {
-    cli::parse_marker_set(nlohmann::json::parse(text), *model);
-  } catch (const cli::RequestError& e) {
+    animator::parse_marker_set(nlohmann::json::parse(text), *model);
+  } catch (const animator::MarkerSetError& e) {
     return e.what();
   }
   return "";

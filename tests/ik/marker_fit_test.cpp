@@ -5,7 +5,7 @@
 #include <cmath>
 #include <iostream>
 
-#include "cli/c3d_markers.hpp"
+#include "animator/marker_trial.hpp"
 #include "cli/marker_set_file.hpp"
 #include "core/human_figure.hpp"
 #include "ik/marker_calibration.hpp"
@@ -22,7 +22,7 @@ using marker_fit_test::markers_of;
 using marker_fit_test::smooth_motion;
 
 ik::MarkerSet bundled_set(const core::Model& m) {
-  return cli::read_marker_set_file(cli::bundled_marker_set_path(m), m);
+  return cli::read_marker_set_file(animator::bundled_marker_set_path(m), m);
 }
 
 // angle between the truth and the fit of one joint (rad)
@@ -168,8 +168,8 @@ TEST(MarkerCalibration, RecoversSegmentScalesAndOffsets) {
 struct Cmu85_02 {
   std::shared_ptr<const core::Model> model = core::build_human_figure();
   ik::MarkerSet set = bundled_set(*model);
-  cli::TrialMarkers markers =
-      cli::markers_from_c3d(io::read_c3d(fixtures::data_dir() + "/c3d/cmu_85_02.c3d"), set);
+  animator::TrialMarkers markers =
+      animator::markers_from_c3d(io::read_c3d(fixtures::data_dir() + "/c3d/cmu_85_02.c3d"), set);
 };
 
 TEST(MarkerFitReal, Cmu85_02) {
@@ -177,7 +177,7 @@ TEST(MarkerFitReal, Cmu85_02) {
   const Cmu85_02 cmu;
   const auto& model = cmu.model;
   const ik::MarkerSet& set = cmu.set;
-  const cli::TrialMarkers& tm = cmu.markers;
+  const animator::TrialMarkers& tm = cmu.markers;
   EXPECT_TRUE(tm.not_in_trial.empty());
   struct Case {
     const char* name;
@@ -237,7 +237,7 @@ TEST(MarkerFitReal, OpenSimWalking5WithTheGaitClusterSet) {
     const std::shared_ptr<const core::Model> model = core::build_human_figure(options);
     const ik::MarkerSet set =
         cli::read_marker_set_file(io::characters_dir() + "/markers/gait_clusters.json", *model);
-    const cli::TrialMarkers tm = cli::markers_from_c3d(
+    const animator::TrialMarkers tm = animator::markers_from_c3d(
         io::read_c3d(fixtures::data_dir() + "/c3d/opensim_walking5.c3d"), set);
     EXPECT_TRUE(tm.not_in_trial.empty());
     const ik::MarkerTrajectories& t = tm.trajectories;
@@ -295,7 +295,7 @@ TEST(MarkerFitReal, TwoThreadsFitTheTrialAsOnePassDoes) {
   const Cmu85_02 cmu;
   const auto& model = cmu.model;
   const ik::MarkerSet& set = cmu.set;
-  const cli::TrialMarkers& tm = cmu.markers;
+  const animator::TrialMarkers& tm = cmu.markers;
   ASSERT_GE(tm.trajectories.frames, 2 * ik::kMinChunkFrames);
   for (const bool ranges : {false, true}) {
     ik::MarkerFitSettings one;
@@ -331,7 +331,7 @@ TEST(MarkerFitReal, AChunkThatStartsElsewhereIsFittedAgainFromTheChunkBefore) {
   const Cmu85_02 cmu;
   const auto& model = cmu.model;
   const ik::MarkerSet& set = cmu.set;
-  const cli::TrialMarkers& tm = cmu.markers;
+  const animator::TrialMarkers& tm = cmu.markers;
   ik::MarkerFitSettings one;
   one.chunk_lead_in = 0;
   one.first_frame_iterations = 1;
