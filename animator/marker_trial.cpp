@@ -2,7 +2,9 @@
 
 #include <filesystem>
 
+#include "ik/marker_calibration.hpp"
 #include "io/bundled_characters.hpp"
+#include "io/json_parse.hpp"
 #include "io/json_reader.hpp"
 
 namespace animator {
@@ -92,6 +94,30 @@ TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& se
       t.present[to] = 1;
     }
   }
+  return out;
+}
+
+FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model) {
+  const std::string set_path = bundled_marker_set_path(model);
+  if (set_path.empty()) {
+    throw MarkerSetError("no marker set for the character '" + model.name +
+                         "' (rule: a marker trial is fitted onto a human figure with a bundled "
+                         "marker set: human48 or human34)");
+  }
+  const ik::MarkerSet set =
+      parse_marker_set(io::read_json_file(set_path, {}, "a marker set"), model);
+  const TrialMarkers markers = markers_from_c3d(trial, set);
+  ik::CalibrationSettings calibration;
+  calibration.estimate_scales = false;
+  // the calibration reads the model through a shared pointer; this one does not own it
+  const std::shared_ptr<const core::Model> borrowed(std::shared_ptr<const core::Model>(), &model);
+  const ik::CalibrationResult c =
+      ik::calibrate_markers(borrowed, set, markers.trajectories, {}, calibration);
+  ik::MarkerFitResult r = ik::fit_trajectories(model, c.set, markers.trajectories);
+  FittedTrial out;
+  out.clip = std::move(r.clip);
+  out.mean_error = r.mean_error;
+  for (const ik::FrameFit& f : r.frames) out.frames_flagged += f.flagged ? 1 : 0;
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/clip.hpp"
 #include "core/model.hpp"
 #include "ik/marker_fit.hpp"
 #include "ik/marker_set.hpp"
@@ -46,5 +47,18 @@ struct TrialMarkers {
 
 /// @throws MarkerSetError when no marker of the set is in the trial
 TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& set);
+
+struct FittedTrial {
+  core::Clip clip;         // one configuration of the model per frame, at the trial's rate
+  double mean_error = 0;   // m, over the fitted samples
+  int frames_flagged = 0;  // too few markers: continued from the frames before
+};
+
+/// Fits a trial onto `model` with its bundled marker set: offsets calibrated on the first second
+/// in which the subject is seen, the model's proportions kept (no segment scaling: the clip is
+/// for this very character), every frame fitted inside the joint ranges.
+/// @throws MarkerSetError when the model has no bundled marker set (human48, human34) or the
+///         trial has none of its markers
+FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model);
 
 }  // namespace animator

@@ -97,6 +97,8 @@ void add_limit_options(CLI::App& cmd, server::ServerOptions& o) {
   bytes("--max-upload-gltf", o.uploads.gltf, "largest .gltf or .glb upload");
   bytes("--max-upload-fbx", o.uploads.fbx, "largest .fbx upload");
   bytes("--max-upload-dae", o.uploads.dae, "largest .dae upload");
+  bytes("--max-upload-c3d", o.uploads.c3d,
+        "largest .c3d upload (a marker trial, fitted on upload)");
 }
 
 }  // namespace

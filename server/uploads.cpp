@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <system_error>
 
+#include "animator/marker_trial.hpp"
 #include "animator/retarget.hpp"
 #include "core/model_edit.hpp"
 #include "io/assimp_import.hpp"
 #include "io/bvh.hpp"
+#include "io/c3d.hpp"
 #include "io/model_file.hpp"
 #include "server/security.hpp"
 
@@ -93,6 +95,7 @@ Cap cap_of(const UploadCaps& caps, const std::string& ext) {
   if (ext == ".bvh") return {caps.bvh, "pindrag serve --max-upload-bvh"};
   if (ext == ".gltf" || ext == ".glb") return {caps.gltf, "pindrag serve --max-upload-gltf"};
   if (ext == ".fbx") return {caps.fbx, "pindrag serve --max-upload-fbx"};
+  if (ext == ".c3d") return {caps.c3d, "pindrag serve --max-upload-c3d"};
   return {caps.dae, "pindrag serve --max-upload-dae"};
 }
 
@@ -136,7 +139,7 @@ io::SkinnedImport load_skinned(const std::string& path, const animator::Limits& 
 
 }  // namespace
 
-std::size_t UploadCaps::largest() const { return std::max({urdf, json, bvh, gltf, fbx, dae}); }
+std::size_t UploadCaps::largest() const { return std::max({urdf, json, bvh, gltf, fbx, dae, c3d}); }
 
 std::string byte_text(std::size_t bytes) {
   constexpr std::size_t kMiB = std::size_t{1} << 20;
@@ -208,11 +211,22 @@ core::Clip clip_from_upload(const std::string& field,
                             bool retarget) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
-  if (ext != ".bvh" && !is_assimp_format(ext)) {
-    throw UploadError(415, field + ": \"" + shown +
-                               "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx or .dae)");
+  if (ext != ".bvh" && ext != ".c3d" && !is_assimp_format(ext)) {
+    throw UploadError(
+        415, field + ": \"" + shown +
+                 "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx, .dae or .c3d)");
   }
   check_upload(field, shown, ext, bytes, rules.caps);
+  if (ext == ".c3d") {
+    // a marker trial: read from memory (no assimp, no temporary file) and fitted onto the
+    // session's character
+    try {
+      const io::C3dTrial trial = io::parse_c3d(bytes, shown, animator::clip_budget(rules.limits));
+      return animator::fit_trial(trial, model).clip;
+    } catch (const std::exception& e) {
+      throw UploadError(422, field + ": " + std::string(e.what()));
+    }
+  }
   TempUpload upload(temp_root, ext, bytes);
   std::shared_ptr<const core::Model> clip_model;
   core::Clip clip;

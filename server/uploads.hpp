@@ -26,6 +26,7 @@ struct UploadCaps {
   std::size_t gltf = std::size_t{64} << 20;  // --max-upload-gltf (.gltf and .glb)
   std::size_t fbx = std::size_t{64} << 20;   // --max-upload-fbx
   std::size_t dae = std::size_t{64} << 20;   // --max-upload-dae (COLLADA)
+  std::size_t c3d = std::size_t{64} << 20;   // --max-upload-c3d (marker trials, fitted on upload)
   /// The largest of them: what the HTTP server reads of a request at most.
   std::size_t largest() const;
 };
@@ -71,7 +72,9 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                                                        const UploadRules& rules = {},
                                                        std::optional<double> bvh_scale = {});
 
-/// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae). The clip must fit
+/// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae), or a marker trial
+/// (.c3d) fitted onto `model` with its bundled marker set (animator::fit_trial; a character
+/// without one is a 422 naming the rule). The clip must fit
 /// `model` (same links, same joint types), else UploadError 422 (code "skeleton_differs") unless
 /// `retarget`: a clip of another skeleton is then retargeted onto `model`
 /// (animator/retarget.hpp), and one that cannot be (no recognisable legs) is a 422 naming why.

@@ -1,5 +1,8 @@
 // Integration tests of the server (server/server.hpp) over real sockets on ephemeral loopback
 // ports: the protocol end to end, the drag burst, reconnect and restart, and the security corpus.
+#include <fstream>
+
+#include "tests/fixtures/fixtures.hpp"
 #include "tests/server/server_fixture.hpp"
 
 namespace {
@@ -407,6 +410,45 @@ TEST_F(ServerTest, OversizeUploadGets413) {
   ASSERT_TRUE(res2);
   EXPECT_EQ(res2->status, 422);
   EXPECT_NE(json::parse(res2->body).at("error").get<std::string>().find("clip"), std::string::npos);
+  EXPECT_EQ(c.Get("/api/health")->status, 200);
+}
+
+// "Load clip…" with a marker trial: fitted onto the human figure with its bundled marker set,
+// it becomes the session's clip; a character without a marker set and a broken file are 422s
+// naming the rule or the field, and the session keeps what it had.
+TEST_F(ServerTest, AMarkerTrialUploadIsFittedOntoTheHumanFigure) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  std::ifstream file(fixtures::data_dir() + "/c3d/cmu_85_02.c3d", std::ios::binary);
+  const std::string trial((std::istreambuf_iterator<char>(file)), {});
+  ASSERT_GT(trial.size(), 512u);
+  auto c = http();
+  const auto upload = [&](const Created& s, const std::string& bytes, const std::string& name) {
+    const httplib::MultipartFormDataItems items{{"clip", bytes, name, "application/octet-stream"}};
+    return c.Post("/api/sessions/" + s.id + "/clip",
+                  {{"X-Session-Token", s.token}, {"Origin", origin()}}, items);
+  };
+  const Created s = create_session("human48");
+  const auto fitted = upload(s, trial, "cmu_85_02.c3d");
+  ASSERT_TRUE(fitted);
+  ASSERT_EQ(fitted->status, 200) << fitted->body;
+  EXPECT_EQ(json::parse(fitted->body).at("frames"), 810);
+  const json snap = snapshot(s);
+  EXPECT_EQ(snap.at("clip").at("frames"), 810);
+  EXPECT_NEAR(snap.at("clip").at("frame_time").get<double>(), 1.0 / 120, 1e-9);
+  // a truncated trial: the field and the C3D rule are named, the fitted clip stays
+  const auto broken = upload(s, trial.substr(0, 300), "short.c3d");
+  ASSERT_TRUE(broken);
+  EXPECT_EQ(broken->status, 422);
+  const std::string why = json::parse(broken->body).at("error");
+  EXPECT_NE(why.find("clip: short.c3d: header"), std::string::npos) << why;
+  EXPECT_EQ(snapshot(s).at("clip").at("frames"), 810);
+  // a robot arm has no marker set
+  const Created arm = create_session("arm7");
+  const auto refused = upload(arm, trial, "cmu_85_02.c3d");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 422);
+  const std::string rule = json::parse(refused->body).at("error");
+  EXPECT_NE(rule.find("no marker set for the character 'arm7'"), std::string::npos) << rule;
   EXPECT_EQ(c.Get("/api/health")->status, 200);
 }
 

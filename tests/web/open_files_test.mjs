@@ -4,7 +4,8 @@
 // open it as its own character, which brings the clip, or to retarget it onto this character; a
 // malformed file is refused with a message naming it and the session stays as it was. Every file
 // of ../shared/data/{bvh,gltf,urdf} opens as a session; the URDF robots stand on the ground; a
-// BVH opens in the unit guessed from its height or in the one chosen.
+// BVH opens in the unit guessed from its height or in the one chosen. "Load clip…" with a marker
+// trial (C3D) fits it onto the human figure.
 // Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
 import { test, before } from 'node:test';
@@ -179,6 +180,23 @@ test('Load clip with another skeleton can retarget it onto this character', { sk
   assert.equal((await sessionOf(page)).id, before.id, 'the tab stays on its session');
   assert.equal(s.character.name, 'human48');
   assert.ok(s.clip && s.clip.frames > 30, 'the retargeted clip is the clip now');
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
+test('Load clip with a marker trial fits it onto the human figure', { skip: noData }, async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  await page.setInputFiles('#clip-file', path.join(DATA_DIR, 'c3d', 'cmu_85_02.c3d'));
+  // the fitted clip becomes this session's clip (810 frames at 120 Hz), and the page plays it
+  await page.waitForFunction(() => window.pindrag?.session?.clip?.frames === 810, null, { timeout: 60000 });
+  const s = await server.snapshot(before.id, before.token);
+  console.log(`cmu_85_02.c3d fitted onto ${s.character.name}: clip of ${s.clip?.frames} frames at ${(1 / s.clip?.frame_time).toFixed(1)} fps`);
+  assert.equal((await sessionOf(page)).id, before.id, 'the tab stays on its session');
+  assert.equal(s.character.name, 'human48');
+  assert.ok(s.clip && s.clip.frames === 810, `clip: ${JSON.stringify(s.clip)}`);
+  assert.ok(Math.abs(s.clip.frame_time - 1 / 120) < 1e-9);
   assert.deepEqual(problems, []);
   await context.close();
 });

@@ -4,7 +4,8 @@
 import { h, uploadTooLarge } from './panel_util.js';
 import { PIN_MODES, EXPORT_FORMATS } from './protocol.js';
 
-const ACCEPTED_CLIPS = '.bvh,.glb,.gltf,.fbx,.dae';
+// a marker trial (.c3d) is fitted onto the character by the server (docs/marker-fitting.md)
+const ACCEPTED_CLIPS = '.bvh,.glb,.gltf,.fbx,.dae,.c3d';
 
 function segmented(name, options, current, onPick) {
   const buttons = options.map(([value, label, title]) =>
@@ -46,7 +47,7 @@ export function createToolbar(state, api, connection, actions, openDialog) {
 
   // clip upload
   const fileInput = h('input#clip-file', { type: 'file', accept: ACCEPTED_CLIPS, hidden: true });
-  const uploadButton = h('button#upload-clip', { type: 'button', title: 'Load a clip (BVH, glTF, FBX) onto this character', onclick: () => fileInput.click() }, 'Load clip…');
+  const uploadButton = h('button#upload-clip', { type: 'button', title: 'Load a clip (BVH, glTF, FBX) or fit a marker trial (C3D) onto this character', onclick: () => fileInput.click() }, 'Load clip…');
   fileInput.addEventListener('change', async () => {
     const file = fileInput.files[0];
     fileInput.value = '';
