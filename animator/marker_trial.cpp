@@ -97,7 +97,7 @@ TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& se
   return out;
 }
 
-FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model) {
+core::Clip fit_trial(const io::C3dTrial& trial, const core::Model& model) {
   const std::string set_path = bundled_marker_set_path(model);
   if (set_path.empty()) {
     throw MarkerSetError("no marker set for the character '" + model.name +
@@ -113,12 +113,7 @@ FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model) {
   const std::shared_ptr<const core::Model> borrowed(std::shared_ptr<const core::Model>(), &model);
   const ik::CalibrationResult c =
       ik::calibrate_markers(borrowed, set, markers.trajectories, {}, calibration);
-  ik::MarkerFitResult r = ik::fit_trajectories(model, c.set, markers.trajectories);
-  FittedTrial out;
-  out.clip = std::move(r.clip);
-  out.mean_error = r.mean_error;
-  for (const ik::FrameFit& f : r.frames) out.frames_flagged += f.flagged ? 1 : 0;
-  return out;
+  return ik::fit_trajectories(model, c.set, markers.trajectories).clip;
 }
 
 }  // namespace animator

@@ -48,17 +48,12 @@ struct TrialMarkers {
 /// @throws MarkerSetError when no marker of the set is in the trial
 TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& set);
 
-struct FittedTrial {
-  core::Clip clip;         // one configuration of the model per frame, at the trial's rate
-  double mean_error = 0;   // m, over the fitted samples
-  int frames_flagged = 0;  // too few markers: continued from the frames before
-};
-
 /// Fits a trial onto `model` with its bundled marker set: offsets calibrated on the first second
 /// in which the subject is seen, the model's proportions kept (no segment scaling: the clip is
 /// for this very character), every frame fitted inside the joint ranges.
 /// @throws MarkerSetError when the model has no bundled marker set (human48, human34) or the
 ///         trial has none of its markers
-FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model);
+/// @return one configuration of the model per frame, at the trial's rate
+core::Clip fit_trial(const io::C3dTrial& trial, const core::Model& model);
 
 }  // namespace animator

@@ -14,6 +14,13 @@ namespace cli {
 
 namespace {
 
+// most frames a resampled clip may have (as the BVH reader's limit)
+[[noreturn]] void refuse(const std::string& message) { throw core::ModelError({message}); }
+
+constexpr double kMaxResampledFrames = static_cast<double>(io::kMaxBvhFrames);
+
+}  // namespace
+
 std::string lower_extension(const std::string& path) {
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
@@ -23,13 +30,6 @@ std::string lower_extension(const std::string& path) {
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
-
-// most frames a resampled clip may have (as the BVH reader's limit)
-[[noreturn]] void refuse(const std::string& message) { throw core::ModelError({message}); }
-
-constexpr double kMaxResampledFrames = static_cast<double>(io::kMaxBvhFrames);
-
-}  // namespace
 
 std::optional<ClipFormat> clip_format(const std::string& path) {
   const std::string ext = lower_extension(path);

@@ -18,6 +18,8 @@ namespace cli {
 
 enum class ClipFormat { kBvh, kGltf, kGlb, kFbx, kDae };
 
+/// The extension of `path`'s file name, lowercased, with its dot (".bvh"), or "".
+std::string lower_extension(const std::string& path);
 /// The format named by the extension of `path` (case-insensitive), or empty.
 std::optional<ClipFormat> clip_format(const std::string& path);
 /// True for formats a clip can be written to (.bvh, .gltf, .glb).

@@ -86,11 +86,6 @@ nlohmann::json c3d_summary(const std::string& path) {
   return out;
 }
 
-bool is_c3d(const std::string& path) {
-  return path.size() > 4 && (path.compare(path.size() - 4, 4, ".c3d") == 0 ||
-                             path.compare(path.size() - 4, 4, ".C3D") == 0);
-}
-
 }  // namespace
 
 void add_info_command(CLI::App& app) {
@@ -105,7 +100,7 @@ void add_info_command(CLI::App& app) {
   cmd->callback([file] {
     nlohmann::json out;
     try {
-      if (is_c3d(*file)) {
+      if (lower_extension(*file) == ".c3d") {
         out = c3d_summary(*file);
       } else if (clip_format(*file)) {
         out = clip_summary(*file);

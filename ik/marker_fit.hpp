@@ -57,11 +57,6 @@ struct MarkerFitSettings {
   // weight of a pull toward the rest posture on every joint below the root: keeps joints the
   // markers do not see (a spine or neck without markers, a toe) from drifting (0: none)
   double reference_weight = 0.0;
-  // fit_trajectories: threads that fit a long trial in contiguous chunks (0: one per core). A
-  // chunk starts chunk_lead_in frames early, from the rest pose placed on the markers, and keeps
-  // only its own frames, so each of them is warm-started as in a single pass. A chunk whose first
-  // frame is not the fit the chunk before it reaches there (inside the ranges a lead-in can
-  // settle on another solution) is fitted again from that chunk's end.
   // inside the joint ranges, a frame fitted with an RMS marker error above restart_rms (m) is
   // fitted once more from another start: its warm start fitted without the ranges, then brought
   // inside them. The better of the two fits is kept. After a fast, extreme movement (a kick above
@@ -69,6 +64,11 @@ struct MarkerFitSettings {
   // a metre off; the unbounded fit finds where the limbs are and the ranges then hold them at
   // their nearest admissible pose (0: never)
   double restart_rms = 0.04;
+  // fit_trajectories: threads that fit a long trial in contiguous chunks (0: one per core). A
+  // chunk starts chunk_lead_in frames early, from the rest pose placed on the markers, and keeps
+  // only its own frames, so each of them is warm-started as in a single pass. A chunk whose first
+  // frame is not the fit the chunk before it reaches there (inside the ranges a lead-in can
+  // settle on another solution) is fitted again from that chunk's end.
   int threads = 1;
   int chunk_lead_in = 30;  // frames fitted before a chunk's first one and discarded (warm-up)
 };

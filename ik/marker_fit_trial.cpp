@@ -119,11 +119,11 @@ ChunkEnd fit_range(const core::Model& model,
       // warm start: the previous pose, moved on by the previous frame's velocity
       if (started && settings.predict && f - history >= 2) previous(q);
       const int iterations = started ? settings.max_iterations : settings.first_frame_iterations;
-      warm_start = q;
+      const bool may_restart = started && settings.enforce_ranges && settings.restart_rms > 0;
+      if (may_restart) warm_start = q;
       fit = fitter.fit(targets, present, q, iterations);
       const MarkerFitter* used = &fitter;
-      if (started && settings.enforce_ranges && settings.restart_rms > 0 &&
-          fit.rms > settings.restart_rms) {
+      if (may_restart && fit.rms > settings.restart_rms) {
         if (!unbounded) {
           MarkerFitSettings free_joints = settings;
           free_joints.enforce_ranges = false;

@@ -222,7 +222,7 @@ core::Clip clip_from_upload(const std::string& field,
     // session's character
     try {
       const io::C3dTrial trial = io::parse_c3d(bytes, shown, animator::clip_budget(rules.limits));
-      return animator::fit_trial(trial, model).clip;
+      return animator::fit_trial(trial, model);
     } catch (const std::exception& e) {
       throw UploadError(422, field + ": " + std::string(e.what()));
     }
