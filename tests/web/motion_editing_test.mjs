@@ -56,12 +56,19 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
   await page.waitForFunction(() => window.pindrag.session?.playback?.loop === true);
 
   // a pin on the right hand, which the clip moves; then play at 1x
+  // (the pose can read time 0 before the seek: the seek's own pose is awaited, so the right click
+  // lands on the hand where frame 0 places it)
+  const poseBefore = await page.evaluate(() => window.pindrag.lastPose?.frame ?? -1);
   await page.click('#tl-first');
-  await page.waitForFunction(() => window.pindrag.lastPose?.time === 0, null, { timeout: 5000 });
-  await page.waitForTimeout(100);
+  await page.waitForFunction((f) => window.pindrag.lastPose?.frame > f && window.pindrag.lastPose.time === 0, poseBefore, { timeout: 5000 });
   const h = await handle(page, 'r_hand');
   await page.mouse.click(h.x, h.y, { button: 'right' });
-  await page.waitForFunction(() => (window.pindrag.session?.pins || []).some((p) => p.link === 'r_hand'), null, { timeout: 5000 });
+  await page
+    .waitForFunction(() => (window.pindrag.session?.pins || []).some((p) => p.link === 'r_hand'), null, { timeout: 5000 })
+    .catch(async (err) => {
+      const now = await page.evaluate(() => ({ pins: window.pindrag.session?.pins, pose: window.pindrag.lastPose, hand: window.pindrag.project('r_hand') }));
+      throw new Error(`a right click at (${h.x.toFixed(0)}, ${h.y.toFixed(0)}) did not pin the right hand: ${JSON.stringify(now)} (${err.message})`);
+    });
   await page.click('#tl-play');
   await page.waitForFunction(() => window.pindrag.session?.playback?.playing === true);
 
