@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "animator/clip_markers.hpp"
 #include "animator/edit_layer.hpp"
 #include "animator/keyframes.hpp"
 #include "animator/pin.hpp"
@@ -23,6 +24,7 @@ struct Document {
   std::vector<Pin> pins;
   KeyTrack keys;
   std::shared_ptr<const core::Clip> clip;
+  std::shared_ptr<const ClipMarkers> markers;  // of the trial the clip was fitted to, else null
   LayerStack layers;
   ik::SolverSettings settings;
   sim::Scene scene;  // the effects it simulates

@@ -95,6 +95,9 @@ json document_changes(const core::Model& model,
     out["keys"] = {{"at", keys.at}, {"remove", keys.remove}, {"insert", inserted}};
   }
   if (doc0.clip != doc1.clip) out["clip"] = doc1.clip ? clip_to_json(*doc1.clip) : json(nullptr);
+  if (doc0.markers != doc1.markers) {
+    out["markers"] = doc1.markers ? clip_markers_to_json(model, *doc1.markers) : json(nullptr);
+  }
   // layers are immutable once made: a changed layer is a new object
   const Splice layers =
       splice_between(doc0.layers, doc1.layers, [](const auto& a, const auto& b) { return a == b; });
@@ -123,13 +126,19 @@ void apply_document_changes(const core::Model& model,
   io::rethrow_as<SessionError>([&] {
     const JsonField c(changes);
     f.object(c);
-    f.refuse_unknown_keys(c, {"q", "pins", "keys", "clip", "layers", "settings", "scene",
+    f.refuse_unknown_keys(c, {"q", "pins", "keys", "clip", "markers", "layers", "settings", "scene",
                               "edit_falloff", "playback"});
     if (c["q"]) d.q = read_configuration(f, c["q"], model);
     if (c["pins"]) d.pins = read_pins(f, c["pins"], model);
     if (c["keys"]) apply_key_splice(f, c["keys"], model, d.keys);
     if (const JsonField clip = c["clip"]) {
       d.clip = clip->is_null() ? nullptr : read_clip(f, clip, model);
+    }
+    if (const JsonField markers = c["markers"]) {
+      d.markers = markers->is_null() ? nullptr : read_clip_markers(f, markers, model);
+    }
+    if (const std::string e = check_document_markers(d); !e.empty()) {
+      f.fail(c["markers"] ? c["markers"] : c, e);
     }
     if (c["layers"]) apply_layer_splice(f, c["layers"], model, d.layers);
     if (const JsonField settings = c["settings"]) {

@@ -4,7 +4,8 @@
 // undo), without running the solver again.
 //
 // Only what differs is written, in the session file's notation (document_json.hpp):
-//   {"q": [...], "pins": [...], "clip": {...} | null, "settings": {...}, "scene": {...},
+//   {"q": [...], "pins": [...], "clip": {...} | null, "markers": {...} | null,
+//    "settings": {...}, "scene": {...},
 //    "edit_falloff": s, "playback": {...},
 //    "keys":   {"at": i, "remove": n, "insert": [key, ...]},
 //    "layers": {"at": i, "remove": n, "insert": [layer, ...]}}

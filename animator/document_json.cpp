@@ -197,6 +197,83 @@ std::shared_ptr<const core::Clip> read_clip(JsonFields& f,
   return std::make_shared<const core::Clip>(std::move(c));
 }
 
+// --- the markers of a clip's trial -------------------------------------------------------------
+
+namespace {
+// more than any marker set in use (Plug-in Gait full body: 39; dense research sets: ~100)
+constexpr std::size_t kMaxClipMarkers = 1024;
+}  // namespace
+
+json clip_markers_to_json(const core::Model& m, const ClipMarkers& markers) {
+  json set = json::array();
+  for (const ik::Marker& marker : markers.set.markers) {
+    set.push_back({{"name", marker.name},
+                   {"link", m.link_name[marker.link]},
+                   {"offset", vec3(marker.offset)}});
+  }
+  const ik::MarkerTrajectories& t = markers.measured;
+  json frames = json::array();
+  for (int f = 0; f < t.frames; ++f) {
+    json row = json::array();
+    for (int k = 0; k < t.markers; ++k) {
+      const core::Vector3& p = t.frame_positions(f)[k];
+      for (int c = 0; c < 3; ++c) row.push_back(t.frame_present(f)[k] ? json(p[c]) : json(nullptr));
+    }
+    frames.push_back(std::move(row));
+  }
+  return {{"rate", t.rate_hz}, {"markers", set}, {"frames", frames}};
+}
+
+std::shared_ptr<const ClipMarkers> read_clip_markers(JsonFields& f,
+                                                     const JsonField& markers,
+                                                     const core::Model& m) {
+  f.object(markers);
+  ik::MarkerSet set;
+  const JsonField list = f.array(markers["markers"], kMaxClipMarkers, "markers");
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const JsonField entry = f.object(list[k]);
+    ik::Marker marker;
+    marker.name = f.string(entry["name"]);
+    const std::string link = f.string(entry["link"]);
+    marker.link = m.link_index(link);
+    if (marker.link < 1) f.fail(entry["link"], "unknown link " + io::in_quotes(link));
+    marker.offset = f.vector3(entry["offset"]);
+    set.markers.push_back(std::move(marker));
+  }
+  ik::MarkerTrajectories t;
+  t.rate_hz = f.number(markers["rate"], {.lo = 0, .hi = 1e6});
+  t.markers = set.size();
+  const JsonField frames = f.array(markers["frames"]);
+  t.frames = static_cast<int>(std::min<std::size_t>(frames.size(), kMaxInt));
+  const std::size_t width = 3 * static_cast<std::size_t>(t.markers);
+  for (int fr = 0; fr < t.frames; ++fr) {
+    const JsonField row = f.array(frames[fr]);
+    if (row.size() != width) {
+      f.fail(row, "expected " + std::to_string(width) + " numbers or nulls (three per marker)");
+    }
+    for (int k = 0; k < t.markers; ++k) {
+      const JsonField x = row[3 * k], y = row[3 * k + 1], z = row[3 * k + 2];
+      const int nulls = int{x->is_null()} + int{y->is_null()} + int{z->is_null()};
+      if (nulls == 3) {
+        t.positions.push_back(core::Vector3::Zero());
+        t.present.push_back(0);
+        continue;
+      }
+      if (nulls != 0) f.fail(row, "marker " + std::to_string(k) + ": part of a sample is null");
+      t.positions.emplace_back(f.number(x), f.number(y), f.number(z));
+      t.present.push_back(1);
+    }
+  }
+  if (const std::string e = check_clip_markers(m, set, t); !e.empty()) f.fail(markers, e);
+  return make_clip_markers(m, std::move(set), std::move(t));
+}
+
+std::string check_document_markers(const Document& d) {
+  if (!d.markers) return {};
+  if (!d.clip) return "markers without a clip (rule: markers ride on the clip fitted to them)";
+  return check_markers_fit_clip(*d.markers, *d.clip);
+}
+
 // --- the BVH source of a character -------------------------------------------------------------
 
 json bvh_source_to_json(const io::BvhLayout& layout) {

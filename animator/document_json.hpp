@@ -52,6 +52,19 @@ std::shared_ptr<const core::Clip> read_clip(io::JsonFields& f,
                                             const io::JsonField& clip,
                                             const core::Model& m);
 
+/// The markers of a clip's trial as {"rate": Hz, "markers": [{"name", "link", "offset": [x, y,
+/// z]}], "frames": [[x, y, z, x, y, z, ...], ...]}: one row per frame, three numbers per marker in
+/// the order of "markers", null for each coordinate of a missing sample (metres, world frame).
+nlohmann::json clip_markers_to_json(const core::Model& m, const ClipMarkers& markers);
+/// Markers that pass check_clip_markers for `m` (a fresh revision).
+std::shared_ptr<const ClipMarkers> read_clip_markers(io::JsonFields& f,
+                                                     const io::JsonField& markers,
+                                                     const core::Model& m);
+
+/// Empty when the document's markers, if any, ride on its clip (check_markers_fit_clip); else
+/// the rule broken.
+std::string check_document_markers(const Document& d);
+
 /// The scene as {"gravity": bool, ...}: every effect of sim::kAllEffects by name.
 nlohmann::json scene_to_json(const sim::Scene& scene);
 sim::Scene read_scene(io::JsonFields& f, const io::JsonField& scene);

@@ -28,6 +28,14 @@ std::size_t layer_bytes(const EditLayer& l) {
   return n;
 }
 
+std::size_t markers_bytes(const ClipMarkers& m) {
+  std::size_t n = sizeof(ClipMarkers) + m.set.markers.capacity() * sizeof(ik::Marker) +
+                  m.measured.positions.capacity() * sizeof(core::Vector3) +
+                  m.measured.present.capacity() + 3 * kBlockOverhead;
+  for (const ik::Marker& marker : m.set.markers) n += marker.name.capacity();
+  return n;
+}
+
 bool holds(const LayerStack& layers, const std::shared_ptr<const EditLayer>& layer) {
   return std::find(layers.begin(), layers.end(), layer) != layers.end();
 }
@@ -38,6 +46,7 @@ DocumentChange::Side::Side(const Document& d)
     : q(d.q),
       pins(d.pins),
       clip(d.clip),
+      markers(d.markers),
       layers(d.layers),
       settings(d.settings),
       scene(d.scene),
@@ -47,6 +56,7 @@ void DocumentChange::Side::assign_to(Document& d) const {
   d.q = q;
   d.pins = pins;
   d.clip = clip;
+  d.markers = markers;
   d.layers = layers;
   d.settings = settings;
   d.scene = scene;
@@ -102,6 +112,7 @@ void DocumentChange::count_bytes() {
   }
   // what the edit replaced lives on in this entry only; what it made is the document's
   if (before_.clip && before_.clip != after_.clip) n += clip_bytes(*before_.clip);
+  if (before_.markers && before_.markers != after_.markers) n += markers_bytes(*before_.markers);
   for (const auto& layer : before_.layers) {
     if (!holds(after_.layers, layer)) n += layer_bytes(*layer);
   }

@@ -62,6 +62,7 @@ class DocumentChange final : public Command {
     Eigen::VectorXd q;
     std::vector<Pin> pins;
     std::shared_ptr<const core::Clip> clip;
+    std::shared_ptr<const ClipMarkers> markers;
     LayerStack layers;
     ik::SolverSettings settings;
     sim::Scene scene;

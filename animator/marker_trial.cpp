@@ -97,7 +97,7 @@ TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& se
   return out;
 }
 
-core::Clip fit_trial(const io::C3dTrial& trial, const core::Model& model) {
+FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model) {
   const std::string set_path = bundled_marker_set_path(model);
   if (set_path.empty()) {
     throw MarkerSetError("no marker set for the character '" + model.name +
@@ -113,7 +113,10 @@ core::Clip fit_trial(const io::C3dTrial& trial, const core::Model& model) {
   const std::shared_ptr<const core::Model> borrowed(std::shared_ptr<const core::Model>(), &model);
   const ik::CalibrationResult c =
       ik::calibrate_markers(borrowed, set, markers.trajectories, {}, calibration);
-  return ik::fit_trajectories(model, c.set, markers.trajectories).clip;
+  FittedTrial out;
+  out.clip = ik::fit_trajectories(model, c.set, markers.trajectories).clip;
+  out.markers = make_clip_markers(model, c.set, markers.trajectories);
+  return out;
 }
 
 }  // namespace animator

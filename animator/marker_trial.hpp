@@ -9,11 +9,13 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "animator/clip_markers.hpp"
 #include "core/clip.hpp"
 #include "core/model.hpp"
 #include "ik/marker_fit.hpp"
@@ -53,7 +55,10 @@ TrialMarkers markers_from_c3d(const io::C3dTrial& trial, const ik::MarkerSet& se
 /// for this very character), every frame fitted inside the joint ranges.
 /// @throws MarkerSetError when the model has no bundled marker set (human48, human34) or the
 ///         trial has none of its markers
-/// @return one configuration of the model per frame, at the trial's rate
-core::Clip fit_trial(const io::C3dTrial& trial, const core::Model& model);
+struct FittedTrial {
+  core::Clip clip;                             // one configuration of the model per frame
+  std::shared_ptr<const ClipMarkers> markers;  // the trial's markers of the set, calibrated
+};
+FittedTrial fit_trial(const io::C3dTrial& trial, const core::Model& model);
 
 }  // namespace animator

@@ -156,9 +156,16 @@ class Session {
 
   // --- clips and edit layers -------------------------------------------------------------------
   /// Replaces the base clip (an import or a recording). Its model must be this session's.
+  /// `markers`: the measured markers of the trial the clip was fitted to (one row per frame, at
+  /// its rate), kept with it until another clip replaces it; null for any other clip.
   /// @throws BudgetError when the clip exceeds the clip limits
-  void set_clip(core::Clip clip, const std::string& label = "set clip");
+  /// @throws SessionError when the markers do not fit the clip
+  void set_clip(core::Clip clip,
+                const std::string& label = "set clip",
+                std::shared_ptr<const ClipMarkers> markers = nullptr);
   const core::Clip* clip() const { return doc_.clip.get(); }
+  /// The markers of the trial the clip was fitted to, or null.
+  const ClipMarkers* clip_markers() const { return doc_.markers.get(); }
   const LayerStack& layers() const { return doc_.layers; }
   void set_layer_muted(int index, bool muted);
   void set_layer_weight(int index, double weight);

@@ -127,13 +127,21 @@ void Session::bake_keys(double rate) {
 
 // --- clips and layers ----------------------------------------------------------------------------
 
-void Session::set_clip(core::Clip clip, const std::string& label) {
+void Session::set_clip(core::Clip clip,
+                       const std::string& label,
+                       std::shared_ptr<const ClipMarkers> markers) {
   if (const std::string e = core::check_clip(*model_, clip); !e.empty())
     throw SessionError("clip", e);
   if (clip.empty()) throw SessionError("clip", "has no frames");
   check_clip_budget(clip.size(), clip.frame_time, "clip");
+  if (markers) {
+    std::string e = check_clip_markers(*model_, markers->set, markers->measured);
+    if (e.empty()) e = check_markers_fit_clip(*markers, clip);
+    if (!e.empty()) throw SessionError("markers", e);
+  }
   const Document before = doc_;
   doc_.clip = std::make_shared<const core::Clip>(std::move(clip));
+  doc_.markers = std::move(markers);
   doc_.layers.clear();
   playback_.time = std::clamp(playback_.time, 0.0, doc_.clip->duration());
   show_animation_at(playback_.time);

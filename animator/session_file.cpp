@@ -27,6 +27,11 @@ Document read_document(JsonFields& f, const JsonField& j, const core::Model& m) 
     d.keys.insert(read_key(f, j["keys"][k], m));
   }
   if (!f.present(j["clip"])->is_null()) d.clip = read_clip(f, j["clip"], m);
+  // (files written before markers were kept have no "markers")
+  if (const JsonField markers = j["markers"]; markers && !markers->is_null()) {
+    d.markers = read_clip_markers(f, markers, m);
+    if (const std::string e = check_document_markers(d); !e.empty()) f.fail(markers, e);
+  }
   for (std::size_t k = 0; k < f.array(j["layers"]).size(); ++k) {
     d.layers.push_back(read_layer(f, j["layers"][k], m));
   }
@@ -70,6 +75,7 @@ json session_to_json(const SessionImage& image, bool include_character) {
       {"playback", playback_to_json(image.playback)},
   };
   out["clip"] = d.clip ? clip_to_json(*d.clip) : json(nullptr);
+  out["markers"] = d.markers ? clip_markers_to_json(m, *d.markers) : json(nullptr);
   if (include_character && image.bvh_source) {
     out["bvh_source"] = bvh_source_to_json(*image.bvh_source);
   }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "animator/document_json.hpp"
 #include "animator/session_file.hpp"
 #include "io/bundled_characters.hpp"
 #include "io/bvh.hpp"
@@ -353,6 +354,29 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         res.status = 200;
         res.set_content(a.bytes, "application/octet-stream");
       });
+  // the measured markers of the trial the clip was fitted to (docs/protocol.md, "Markers"): they
+  // change only with the clip, so the revision is the ETag; encoded outside the session's actor
+  // (they are immutable and shared)
+  http.Get(R"(/api/sessions/([^/]+)/markers)", [&ctx](const httplib::Request& req,
+                                                      httplib::Response& res) {
+    const auto actor = session_of(ctx, req, res);
+    if (!actor) return;
+    const std::shared_ptr<const animator::ClipMarkers> markers = actor->call_within(
+        ctx.call_timeout, [](animator::Session& s) { return s.document().markers; });
+    if (!markers) {
+      return send_error(res, 404, "markers: this session's clip was not fitted to a marker trial");
+    }
+    const std::string etag = "\"" + std::to_string(markers->revision) + "\"";
+    res.set_header("ETag", etag);
+    res.set_header("Cache-Control", "private, no-cache");
+    if (req.get_header_value("If-None-Match") == etag) {
+      res.status = 304;
+      return;
+    }
+    json body = animator::clip_markers_to_json(actor->model(), *markers);
+    body["revision"] = markers->revision;
+    send_json(res, 200, body);
+  });
   http.Post(
       R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
         const auto actor = session_of(ctx, req, res);
@@ -363,13 +387,16 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
         try {
           const httplib::MultipartFormData file = req.get_file_value("clip");
           const bool retarget = req.get_param_value("retarget") == "1";
-          core::Clip clip = clip_from_upload("clip", file.filename, file.content, actor->model(),
-                                             ctx.temp_root, ctx.uploads, retarget);
-          const json answer{{"frames", clip.size()}, {"frame_time", clip.frame_time}};
-          auto shared = std::make_shared<core::Clip>(std::move(clip));
+          ClipUpload upload = clip_from_upload("clip", file.filename, file.content, actor->model(),
+                                               ctx.temp_root, ctx.uploads, retarget);
+          json answer{{"frames", upload.clip.size()}, {"frame_time", upload.clip.frame_time}};
+          if (upload.markers) answer["markers"] = upload.markers->set.size();
+          auto shared = std::make_shared<ClipUpload>(std::move(upload));
           actor->call_within(
               ctx.call_timeout,
-              [shared](animator::Session& s) { s.set_clip(std::move(*shared), "import clip"); },
+              [shared](animator::Session& s) {
+                s.set_clip(std::move(shared->clip), "import clip", std::move(shared->markers));
+              },
               /*edit=*/true);
           send_json(res, 200, answer);
         } catch (const UploadError& e) {

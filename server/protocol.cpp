@@ -114,6 +114,13 @@ json state_json(const animator::Session& s, const std::string& session_id) {
   if (const core::Clip* c = s.clip()) {
     clip = {{"frames", c->size()}, {"frame_time", c->frame_time}, {"duration", c->duration()}};
   }
+  json markers = nullptr;
+  if (const animator::ClipMarkers* mk = s.clip_markers()) {
+    markers = {{"count", mk->set.size()},
+               {"frames", mk->measured.frames},
+               {"rate", mk->measured.rate_hz},
+               {"revision", mk->revision}};
+  }
   json layers = json::array();
   for (const auto& layer : s.layers()) {
     layers.push_back({{"name", layer->name},
@@ -131,6 +138,7 @@ json state_json(const animator::Session& s, const std::string& session_id) {
           {"pins", pins},
           {"keys", keys},
           {"clip", clip},
+          {"markers", markers},
           {"layers", layers},
           {"playback",
            {{"time", pb.time},

@@ -202,7 +202,7 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
   }
 }
 
-core::Clip clip_from_upload(const std::string& field,
+ClipUpload clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
@@ -222,7 +222,8 @@ core::Clip clip_from_upload(const std::string& field,
     // session's character
     try {
       const io::C3dTrial trial = io::parse_c3d(bytes, shown, animator::clip_budget(rules.limits));
-      return animator::fit_trial(trial, model);
+      animator::FittedTrial fitted = animator::fit_trial(trial, model);
+      return {std::move(fitted.clip), std::move(fitted.markers)};
     } catch (const std::exception& e) {
       throw UploadError(422, field + ": " + std::string(e.what()));
     }
@@ -249,7 +250,7 @@ core::Clip clip_from_upload(const std::string& field,
   }
   if (!same_skeleton(*clip_model, model) && retarget) {
     try {
-      return animator::retarget(*clip_model, clip, model).clip;
+      return {animator::retarget(*clip_model, clip, model).clip, nullptr};
     } catch (const std::exception& e) {
       throw UploadError(422, field + ": \"" + shown + "\": cannot be retargeted onto the " +
                                  "session's character: " + e.what());
@@ -263,7 +264,7 @@ core::Clip clip_from_upload(const std::string& field,
             " links; rule: same link names, parents and joint types)",
         "skeleton_differs");
   }
-  return clip;
+  return {std::move(clip), nullptr};
 }
 
 }  // namespace server

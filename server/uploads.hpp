@@ -79,7 +79,11 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
 /// `retarget`: a clip of another skeleton is then retargeted onto `model`
 /// (animator/retarget.hpp), and one that cannot be (no recognisable legs) is a 422 naming why.
 /// Caps and budget as for session_from_upload. @throws UploadError
-core::Clip clip_from_upload(const std::string& field,
+struct ClipUpload {
+  core::Clip clip;
+  std::shared_ptr<const animator::ClipMarkers> markers;  // a marker trial's, else null
+};
+ClipUpload clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,

@@ -4,9 +4,12 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <string>
 
 #include "animator/session.hpp"
+#include "animator/session_file.hpp"
 #include "core/clip.hpp"
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
@@ -16,6 +19,16 @@ namespace animator_test {
 inline std::shared_ptr<const core::Model> human() {
   static const auto m = core::build_human_figure({});
   return m;
+}
+
+/// The message of the SessionError that reading the session file `j` throws ("" when none).
+inline std::string session_file_error(const nlohmann::json& j) {
+  try {
+    animator::session_from_json(j, "test.json");
+  } catch (const animator::SessionError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 inline core::Vector3 position(const animator::Session& s, const char* link) {

@@ -14,10 +14,12 @@
 
 #include "core/human_figure.hpp"
 #include "io/bvh.hpp"
+#include "tests/animator/animator_fixtures.hpp"
 
 namespace {
 
 using namespace animator;
+using animator_test::session_file_error;
 using nlohmann::json;
 
 std::shared_ptr<const core::Model> human() {
@@ -33,44 +35,35 @@ json saved() {
   return session_to_json(s);
 }
 
-// The message of the SessionError that reading `j` throws ("" when none).
-std::string error_of(const json& j) {
-  try {
-    session_from_json(j, "test.json");
-  } catch (const SessionError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(SessionFile, BadFieldsAreNamedAsPointers) {
   json j = saved();
-  EXPECT_EQ(error_of(j), "");
+  EXPECT_EQ(session_file_error(j), "");
   j["pins"][0]["mode"] = "glue";
-  EXPECT_EQ(error_of(j), "/pins/0/mode: 'glue' is not position, orientation or pose");
+  EXPECT_EQ(session_file_error(j), "/pins/0/mode: 'glue' is not position, orientation or pose");
   j = saved();
   j["pins"][0]["rotation"] = {2, 0, 0, 0};
-  EXPECT_EQ(error_of(j).rfind("/pins/0/rotation: quaternion [w, x, y, z] has norm 2", 0), 0u);
+  EXPECT_EQ(session_file_error(j).rfind("/pins/0/rotation: quaternion [w, x, y, z] has norm 2", 0),
+            0u);
   j = saved();
   j["keys"][0]["q"][3] = "x";
-  EXPECT_EQ(error_of(j), "/keys/0/q/3: expected a number, got a string");
+  EXPECT_EQ(session_file_error(j), "/keys/0/q/3: expected a number, got a string");
   j = saved();
   j["playback"].erase("speed");
-  EXPECT_EQ(error_of(j), "/playback/speed: missing (rule: required)");
+  EXPECT_EQ(session_file_error(j), "/playback/speed: missing (rule: required)");
   j = saved();
   j["scene"]["gravity"] = "yes";
-  EXPECT_EQ(error_of(j), "/scene/gravity: expected true or false, got a string");
+  EXPECT_EQ(session_file_error(j), "/scene/gravity: expected true or false, got a string");
   j = saved();
   j["format"] = 3;
-  EXPECT_EQ(error_of(j), "test.json: not a pindrag session file");
+  EXPECT_EQ(session_file_error(j), "test.json: not a pindrag session file");
 }
 
 TEST(SessionFile, IntegersAreRangeCheckedNotWrapped) {
   json j = saved();
   // 4294967297 iterations would be 1 as a 32-bit int
   j["settings"]["iterations"] = 4294967297ull;
-  EXPECT_EQ(error_of(j).rfind("/settings/iterations: 4294967297 is out of range", 0), 0u)
-      << error_of(j);
+  EXPECT_EQ(session_file_error(j).rfind("/settings/iterations: 4294967297 is out of range", 0), 0u)
+      << session_file_error(j);
   ik::SolverSettings s;
   EXPECT_THROW(settings_from_json({{"iterations", 4294967297ull}}, s), SessionError);
   EXPECT_EQ(s.iterations, ik::SolverSettings{}.iterations);
@@ -172,19 +165,20 @@ TEST(SessionFile, BadBvhSourcesAreNamed) {
   const json good = session_to_json(s);
   json j = good;
   j["bvh_source"]["joints"][1]["channels"][0] = "Wrotation";
-  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/channels/0: 'Wrotation' is not a BVH channel");
+  EXPECT_EQ(session_file_error(j),
+            "/bvh_source/joints/1/channels/0: 'Wrotation' is not a BVH channel");
   j = good;
   j["bvh_source"]["joints"][1]["channels"][1] = "Zrotation";
-  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/channels/1: 'Zrotation' is listed twice");
+  EXPECT_EQ(session_file_error(j), "/bvh_source/joints/1/channels/1: 'Zrotation' is listed twice");
   j = good;
   j["bvh_source"]["joints"][1]["name"] = "Hips";
-  EXPECT_EQ(error_of(j), "/bvh_source/joints/1/name: names a joint twice");
+  EXPECT_EQ(session_file_error(j), "/bvh_source/joints/1/name: names a joint twice");
   j = good;
   j["bvh_source"]["scale"] = 0;
-  EXPECT_EQ(error_of(j), "/bvh_source/scale: must be positive (metres per file unit)");
+  EXPECT_EQ(session_file_error(j), "/bvh_source/scale: must be positive (metres per file unit)");
   j = good;
   j.erase("bvh_source");
-  EXPECT_EQ(error_of(j), "");
+  EXPECT_EQ(session_file_error(j), "");
 }
 
 }  // namespace

@@ -1,6 +1,9 @@
 // Integration tests of the server (server/server.hpp) over real sockets on ephemeral loopback
 // ports: the protocol end to end, the drag burst, reconnect and restart, and the security corpus.
+#include <Eigen/Geometry>
+#include <cmath>
 #include <fstream>
+#include <map>
 
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/server/server_fixture.hpp"
@@ -450,6 +453,79 @@ TEST_F(ServerTest, AMarkerTrialUploadIsFittedOntoTheHumanFigure) {
   const std::string rule = json::parse(refused->body).at("error");
   EXPECT_NE(rule.find("no marker set for the character 'arm7'"), std::string::npos) << rule;
   EXPECT_EQ(c.Get("/api/health")->status, 200);
+}
+
+// The measured markers of a fitted trial are served beside its clip (GET .../markers): in the
+// world frame of the snapshot's links, so that each lies near its virtual marker (link pose times
+// calibrated offset) in the frame shown; revalidated by revision; gone with undo, back with redo.
+TEST_F(ServerTest, AFittedTrialsMarkersAreServedBesideItsClip) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  std::ifstream file(fixtures::data_dir() + "/c3d/cmu_85_02.c3d", std::ios::binary);
+  const std::string trial((std::istreambuf_iterator<char>(file)), {});
+  auto c = http();
+  const Created s = create_session("human48");
+  const httplib::Headers auth{{"X-Session-Token", s.token}, {"Origin", origin()}};
+  EXPECT_EQ(c.Get("/api/sessions/" + s.id + "/markers", auth)->status, 404);
+  const httplib::MultipartFormDataItems items{
+      {"clip", trial, "cmu_85_02.c3d", "application/octet-stream"}};
+  const auto fitted = c.Post("/api/sessions/" + s.id + "/clip", auth, items);
+  ASSERT_TRUE(fitted);
+  ASSERT_EQ(fitted->status, 200) << fitted->body;
+  EXPECT_EQ(json::parse(fitted->body).at("markers"), 41);
+
+  const json snap = snapshot(s);
+  const json& summary = snap.at("markers");
+  EXPECT_EQ(summary.at("count"), 41);
+  EXPECT_EQ(summary.at("frames"), 810);
+  EXPECT_EQ(summary.at("rate"), 120.0);
+  const auto got = c.Get("/api/sessions/" + s.id + "/markers", auth);
+  ASSERT_TRUE(got);
+  ASSERT_EQ(got->status, 200) << got->body;
+  const json markers = json::parse(got->body);
+  EXPECT_EQ(markers.at("revision"), summary.at("revision"));
+  ASSERT_EQ(markers.at("markers").size(), 41u);
+  ASSERT_EQ(markers.at("frames").size(), 810u);
+
+  // the frame shown (time 0): each seen marker against link pose × offset
+  const double time = snap.at("playback").at("time");
+  const auto frame = static_cast<std::size_t>(std::lround(time * 120.0));
+  const json& row = markers.at("frames").at(frame);
+  std::map<std::string, json> links;
+  for (const json& l : snap.at("links")) links[l.at("name")] = l;
+  double sum = 0, worst = 0;
+  int seen = 0;
+  for (std::size_t k = 0; k < 41; ++k) {
+    if (row.at(3 * k).is_null()) continue;
+    const json& m = markers.at("markers").at(k);
+    const json& link = links.at(m.at("link").get<std::string>());
+    const Eigen::Vector3d p(link.at("p")[0], link.at("p")[1], link.at("p")[2]);
+    const Eigen::Quaterniond R(link.at("R")[0], link.at("R")[1], link.at("R")[2], link.at("R")[3]);
+    const Eigen::Vector3d offset(m.at("offset")[0], m.at("offset")[1], m.at("offset")[2]);
+    const Eigen::Vector3d measured(row.at(3 * k), row.at(3 * k + 1), row.at(3 * k + 2));
+    const double r = (measured - (p + R * offset)).norm();
+    sum += r;
+    worst = std::max(worst, r);
+    ++seen;
+  }
+  ASSERT_GT(seen, 30);
+  // (the whole trial fits to 16 mm on average, every marker's mean under 40 mm)
+  EXPECT_LT(sum / seen, 0.03) << "the markers are not where the figure's markers are";
+  EXPECT_LT(worst, 0.1);
+
+  // revalidated by revision
+  httplib::Headers again = auth;
+  again.emplace("If-None-Match", got->get_header_value("ETag"));
+  EXPECT_EQ(c.Get("/api/sessions/" + s.id + "/markers", again)->status, 304);
+
+  // undo takes the fitted clip and its markers away; redo brings both back
+  auto ws = connect(s);
+  ws->read_until("snapshot");
+  request(*ws, {{"type", "undo"}}, 1);
+  EXPECT_TRUE(ws->read_until("state").at("markers").is_null());
+  EXPECT_EQ(c.Get("/api/sessions/" + s.id + "/markers", auth)->status, 404);
+  request(*ws, {{"type", "redo"}}, 2);
+  EXPECT_EQ(ws->read_until("state").at("markers").at("revision"), summary.at("revision"));
+  EXPECT_EQ(c.Get("/api/sessions/" + s.id + "/markers", again)->status, 304);
 }
 
 TEST_F(ServerTest, OversizeMessageClosesWith1009) {
