@@ -184,7 +184,18 @@ test('Load clip with another skeleton can retarget it onto this character', { sk
   await context.close();
 });
 
-test('Load clip with a marker trial fits it onto the human figure', { skip: noData }, async () => {
+/** Switches a view option of the bar over the 3D view (by its label). */
+const setView = (page, key, value) =>
+  page.evaluate(
+    ([k, v]) => {
+      const box = [...document.querySelectorAll('#view-options label.toggle')].find((l) => l.textContent.trim() === k);
+      const input = box.querySelector('input');
+      if (input.checked !== v) input.click();
+    },
+    [key, value],
+  );
+
+test('Load clip with a marker trial fits it onto the human figure, and draws its markers',  { skip: noData }, async () => {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
   const { page, problems } = await openTab(context);
   const before = await sessionOf(page);
@@ -197,6 +208,41 @@ test('Load clip with a marker trial fits it onto the human figure', { skip: noDa
   assert.equal(s.character.name, 'human48');
   assert.ok(s.clip && s.clip.frames === 810, `clip: ${JSON.stringify(s.clip)}`);
   assert.ok(Math.abs(s.clip.frame_time - 1 / 120) < 1e-9);
+
+  // the trial's markers are drawn in the frame shown, each near the figure's virtual marker
+  await page.waitForFunction(() => window.pindrag.markers().shown > 30, null, { timeout: 10000 });
+  const drawn = await page.evaluate(() => ({ markers: window.pindrag.markers(), time: window.pindrag.lastPose.time }));
+  const legend = await page.textContent('#marker-legend');
+  console.log(`frame ${drawn.markers.frame}: ${drawn.markers.shown} markers drawn, mean ${(drawn.markers.mean * 1000).toFixed(1)} mm; legend "${legend}"`);
+  assert.equal(drawn.markers.frame, Math.round(drawn.time * 120));
+  assert.ok(drawn.markers.mean < 0.03, `the markers are ${(drawn.markers.mean * 1000).toFixed(0)} mm from the figure's on average`);
+  assert.match(legend, /^markers, frame \d+: \d+ seen, mean \d+ mm, worst \w+ \d+ mm$/);
+  // pixels where the measured markers project change when the "markers" option hides them
+  const pixels = () =>
+    page.evaluate(() =>
+      window.pindrag
+        .markers()
+        .measured.filter(Boolean)
+        .map((p) => {
+          const s = window.pindrag.projectPoint(p);
+          return s.visible ? window.pindrag.pixelAt(s.x, s.y) : null;
+        }),
+    );
+  const shown = await pixels();
+  await page.screenshot({ path: path.join(out, 'c3d-markers.png') });
+  await setView(page, 'markers', false);
+  assert.equal((await page.evaluate(() => window.pindrag.markers())).visible, false);
+  assert.equal(await page.isVisible('#marker-legend'), false);
+  const hidden = await pixels();
+  await setView(page, 'markers', true);
+  const onScreen = shown.filter(Boolean).length;
+  const changed = shown.filter((c, k) => c && Math.max(...c.map((v, j) => Math.abs(v - hidden[k][j]))) > 10).length;
+  console.log(`${changed} of ${onScreen} marker pixels change when the markers are hidden`);
+  assert.ok(onScreen > 30 && changed >= 0.8 * onScreen, `only ${changed} of ${onScreen} marker pixels show a marker`);
+  // the last frame shows the last frame's markers
+  await page.click('#tl-last');
+  await page.waitForFunction(() => window.pindrag.markers().frame === 809, null, { timeout: 5000 });
+  assert.ok((await page.evaluate(() => window.pindrag.markers())).mean < 0.03);
   assert.deepEqual(problems, []);
   await context.close();
 });

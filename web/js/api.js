@@ -105,6 +105,13 @@ export function createApi() {
       return res.arrayBuffer();
     },
 
+    /** The measured markers of the trial the clip was fitted to (GET .../markers). */
+    async markers() {
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/markers`, { headers: api.headers() });
+      if (!res.ok) throw await failure('markers', res);
+      return res.json();
+    },
+
     /** Loads a clip onto the character; `retarget`: a clip of another skeleton is retargeted onto it. */
     async uploadClip(file, { retarget = false } = {}) {
       const form = new FormData();

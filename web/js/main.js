@@ -29,6 +29,7 @@ import { createCameraFollow } from './camera_follow.js';
 import { bindKeyboard } from './keyboard.js';
 import { createOpenDialog } from './panel_open.js';
 import { createSkinnedView } from './skinned_view.js';
+import { createMarkersView } from './markers_view.js';
 
 const SESSION_STORAGE_KEY = 'pindrag.session';
 const SERVER_KEY_STORAGE_KEY = 'pindrag.key';
@@ -99,6 +100,7 @@ async function main() {
   const pins = createPinsView(state, viewport, skeleton, connection);
   const drag = createDragControls(state, viewport, skeleton, connection, actions, pins);
   const skinned = createSkinnedView(state, viewport, skeleton, api);
+  const markers = createMarkersView(state, viewport, skeleton, api);
   createCameraFollow(state, viewport, skeleton);
   frameEachNewCharacter(state, viewport, skeleton);
   createPhysicsView(state, viewport, document.getElementById('stage'));
@@ -115,7 +117,7 @@ async function main() {
     createStatusPanel(state, connection),
     createSessionsPanel(state, api, switchSession),
   );
-  document.getElementById('stage').append(createViewOptions(state, viewport), createToasts(state), createHelpOverlay(state));
+  document.getElementById('stage').append(createViewOptions(state, viewport), markers.legend, createToasts(state), createHelpOverlay(state));
   document.body.append(openDialog.overlay);
   bindKeyboard(state, actions, drag, viewport, skeleton);
 
@@ -185,6 +187,8 @@ async function main() {
       quaternion: viewport.camera.quaternion.toArray(),
     }),
     contextLost: () => viewport.renderer.getContext().isContextLost(),
+    /** The fitted trial's markers drawn now (markers_view.js): frame, counts, residuals in metres. */
+    markers: () => markers.stats(),
     /** The skinned mesh drawn now: {vertices, visible} (null: none). */
     mesh() {
       const m = skinned.object();

@@ -1,5 +1,5 @@
 // A small bar over the 3D view: show or hide the joint handles, the selected joint's range, the
-// floor grid and a skinned character's mesh, snap keys to frames or not, let the camera follow the figure, choose what a playing
+// floor grid, a skinned character's mesh and a fitted trial's markers, snap keys to frames or not, let the camera follow the figure, choose what a playing
 // clip does while a link is held, and put the camera back home.
 
 import { h } from './panel_util.js';
@@ -39,6 +39,7 @@ export function createViewOptions(state, viewport) {
     toggle('limits', 'ranges', 'Show the selected joint’s range (L)'),
     toggle('grid', 'grid', 'Show the floor grid'),
     toggle('mesh', 'mesh', 'Draw a skinned character’s mesh (off: its capsules)'),
+    toggle('markers', 'markers', 'Draw a fitted marker trial’s markers, with lines to the figure’s markers coloured by distance'),
     toggle('snapKeys', 'snap keys', 'Keys land on frames at the clip’s rate'),
     toggle('follow', 'follow', 'The camera travels with the figure'),
     h('label.toggle', { title: 'What a playing clip does while you hold a link' }, 'while dragging ', whileDragging),

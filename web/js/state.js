@@ -76,7 +76,7 @@ export function createState() {
     pinMode: 'pose',
     gizmoMode: 'translate',
     // whileDragging: what a playing clip does while a link is held: 'play' | 'slow' | 'pause'
-    view: { limits: true, handles: true, grid: true, snapKeys: true, follow: false, mesh: true, whileDragging: 'play' },
+    view: { limits: true, handles: true, grid: true, snapKeys: true, follow: false, mesh: true, markers: true, whileDragging: 'play' },
   };
   signals.hoverChanged.add((i) => (state.hover = i));
   signals.selectionChanged.add((i) => (state.selected = i));
