@@ -163,6 +163,26 @@ Correspondence guess_correspondence(const core::Model& source, const core::Model
   return c;
 }
 
+std::vector<MappingEntry> mapping_from_json(const nlohmann::json& doc, const std::string& origin) {
+  if (!doc.is_object()) {
+    throw std::invalid_argument(origin + ": / : expected an object of source joint name -> " +
+                                "target link name, got " + doc.type_name());
+  }
+  std::vector<MappingEntry> out;
+  for (const auto& [key, value] : doc.items()) {
+    if (value.is_null()) {
+      out.push_back({key, std::nullopt});
+    } else if (value.is_string()) {
+      out.push_back({key, value.get<std::string>()});
+    } else {
+      throw std::invalid_argument(origin + ": /" + key +
+                                  ": expected a link name (string) or null, got " +
+                                  value.type_name());
+    }
+  }
+  return out;
+}
+
 void apply_mapping(const core::Model& source,
                    const core::Model& target,
                    const std::vector<MappingEntry>& entries,

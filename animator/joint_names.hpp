@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -92,6 +93,11 @@ struct MappingEntry {
   std::string source;
   std::optional<std::string> target;
 };
+
+/// A mapping document {"source joint": "target link" or null, ...} as entries, by joint name.
+/// @throws std::invalid_argument "<origin>: /<joint>: <rule>" for a value that is neither a
+///         string nor null, or "<origin>: / : ..." when the document is not an object
+std::vector<MappingEntry> mapping_from_json(const nlohmann::json& doc, const std::string& origin);
 
 /// Applies the user's entries over the guesses: an entry replaces whatever its source joint and
 /// its target link were paired with. `origin` names where the entries come from.

@@ -22,23 +22,7 @@ struct RetargetArgs {
 
 // MAP.json: {"source joint": "target link" or null, ...}
 std::vector<animator::MappingEntry> read_mapping(const std::string& path) {
-  const nlohmann::json j = read_json_file(path);
-  if (!j.is_object()) {
-    throw std::invalid_argument(path + ": / : expected an object of source joint name -> " +
-                                "target link name, got " + j.type_name());
-  }
-  std::vector<animator::MappingEntry> out;
-  for (const auto& [key, value] : j.items()) {
-    if (value.is_null()) {
-      out.push_back({key, std::nullopt});
-    } else if (value.is_string()) {
-      out.push_back({key, value.get<std::string>()});
-    } else {
-      throw std::invalid_argument(
-          path + ": /" + key + ": expected a link name (string) or null, got " + value.type_name());
-    }
-  }
-  return out;
+  return animator::mapping_from_json(read_json_file(path), path);
 }
 
 nlohmann::json report_json(const animator::RetargetReport& r,

@@ -13,6 +13,7 @@
 #include "io/bundled_characters.hpp"
 #include "io/bvh.hpp"
 #include "io/gltf.hpp"
+#include "io/json_parse.hpp"
 #include "server/mesh_binary.hpp"
 #include "server/protocol.hpp"
 #include "server/uploads.hpp"
@@ -36,8 +37,29 @@ void send_json(httplib::Response& res, int status, const json& body) {
   res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
+// Whether the request is a multipart form with a file field "clip"; else a 400 is sent.
+bool has_clip_file(const httplib::Request& req, httplib::Response& res);
+
+// The multipart field "mapping" of a retargeting upload: a mapping document (docs/retargeting.md,
+// "Mapping file"). @throws UploadError 422 naming the field and the rule
+std::vector<animator::MappingEntry> mapping_field(const httplib::MultipartFormData& field) {
+  try {
+    return animator::mapping_from_json(
+        io::parse_json(field.content, "mapping", io::JsonLimits{.max_bytes = std::size_t{1} << 20}),
+        "mapping");
+  } catch (const std::exception& e) {
+    throw UploadError(422, e.what());
+  }
+}
+
 void send_error(httplib::Response& res, int status, const std::string& message) {
   send_json(res, status, json{{"error", message}});
+}
+
+bool has_clip_file(const httplib::Request& req, httplib::Response& res) {
+  if (req.is_multipart_form_data() && req.has_file("clip")) return true;
+  send_error(res, 400, "clip: a multipart file field \"clip\" is required");
+  return false;
 }
 
 std::string content_type(const fs::path& path) {
@@ -381,14 +403,14 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
       R"(/api/sessions/([^/]+)/clip)", [&ctx](const httplib::Request& req, httplib::Response& res) {
         const auto actor = session_of(ctx, req, res);
         if (!actor) return;
-        if (!req.is_multipart_form_data() || !req.has_file("clip")) {
-          return send_error(res, 400, "clip: a multipart file field \"clip\" is required");
-        }
+        if (!has_clip_file(req, res)) return;
         try {
           const httplib::MultipartFormData file = req.get_file_value("clip");
           const bool retarget = req.get_param_value("retarget") == "1";
+          std::vector<animator::MappingEntry> mapping;
+          if (req.has_file("mapping")) mapping = mapping_field(req.get_file_value("mapping"));
           ClipUpload upload = clip_from_upload("clip", file.filename, file.content, actor->model(),
-                                               ctx.temp_root, ctx.uploads, retarget);
+                                               ctx.temp_root, ctx.uploads, retarget, mapping);
           json answer{{"frames", upload.clip.size()}, {"frame_time", upload.clip.frame_time}};
           if (upload.markers) answer["markers"] = upload.markers->set.size();
           auto shared = std::make_shared<ClipUpload>(std::move(upload));
@@ -404,6 +426,22 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
           send_json(res, e.status, {{"error", e.what()}, {"code", e.code}});
         }
       });
+  // the correspondence retargeting would guess for a clip file, for the page's mapping editor;
+  // the session is not changed
+  http.Post(R"(/api/sessions/([^/]+)/clip/correspondence)",
+            [&ctx](const httplib::Request& req, httplib::Response& res) {
+              const auto actor = session_of(ctx, req, res);
+              if (!actor) return;
+              if (!has_clip_file(req, res)) return;
+              try {
+                const httplib::MultipartFormData file = req.get_file_value("clip");
+                send_json(res, 200,
+                          clip_correspondence("clip", file.filename, file.content, actor->model(),
+                                              ctx.temp_root, ctx.uploads));
+              } catch (const UploadError& e) {
+                send_error(res, e.status, e.what());
+              }
+            });
   http.Get(R"(/api/sessions/([^/]+)/export)", [&ctx](const httplib::Request& req,
                                                      httplib::Response& res) {
     const auto actor = session_of(ctx, req, res);

@@ -202,20 +202,63 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
   }
 }
 
+namespace {
+
+struct MotionUpload {
+  std::shared_ptr<const core::Model> model;  // the clip's own skeleton
+  core::Clip clip;
+};
+
+// The first clip of a motion file (.bvh or an assimp format) with its skeleton; BVH joints take
+// the joint types of `character` where the names agree.
+MotionUpload load_motion(const std::string& field,
+                         const std::string& shown,
+                         const std::string& ext,
+                         const std::string& bytes,
+                         const core::Model& character,
+                         const std::string& temp_root,
+                         const UploadRules& rules) {
+  TempUpload upload(temp_root, ext, bytes);
+  try {
+    if (ext == ".bvh") {
+      io::BvhImport imported = load_bvh(upload.file(), rules.limits, &character);
+      return {imported.model, std::move(imported.clip)};
+    }
+    io::SkinnedImport imported = load_skinned(upload.file(), rules.limits);
+    if (imported.clips.empty())
+      throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
+    return {imported.model, std::move(imported.clips.front().clip)};
+  } catch (const UploadError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
+  }
+}
+
+void check_motion_type(const std::string& field,
+                       const std::string& shown,
+                       const std::string& ext,
+                       bool c3d_allowed) {
+  if (ext != ".bvh" && (ext != ".c3d" || !c3d_allowed) && !is_assimp_format(ext)) {
+    throw UploadError(415,
+                      field + ": \"" + shown + "\": unsupported file type (rule: .bvh, .glb, " +
+                          ".gltf, .fbx, .dae" + (c3d_allowed ? " or .c3d)" : " with a skeleton)"));
+  }
+}
+
+}  // namespace
+
 ClipUpload clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
                             const std::string& temp_root,
                             const UploadRules& rules,
-                            bool retarget) {
+                            bool retarget,
+                            const std::vector<animator::MappingEntry>& mapping) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
-  if (ext != ".bvh" && ext != ".c3d" && !is_assimp_format(ext)) {
-    throw UploadError(
-        415, field + ": \"" + shown +
-                 "\": unsupported file type (rule: .bvh, .glb, .gltf, .fbx, .dae or .c3d)");
-  }
+  check_motion_type(field, shown, ext, /*c3d_allowed=*/true);
   check_upload(field, shown, ext, bytes, rules.caps);
   if (ext == ".c3d") {
     // a marker trial: read from memory (no assimp, no temporary file) and fitted onto the
@@ -228,43 +271,58 @@ ClipUpload clip_from_upload(const std::string& field,
       throw UploadError(422, field + ": " + std::string(e.what()));
     }
   }
-  TempUpload upload(temp_root, ext, bytes);
-  std::shared_ptr<const core::Model> clip_model;
-  core::Clip clip;
-  try {
-    if (ext == ".bvh") {
-      io::BvhImport imported = load_bvh(upload.file(), rules.limits, &model);
-      clip_model = imported.model;
-      clip = std::move(imported.clip);
-    } else {
-      io::SkinnedImport imported = load_skinned(upload.file(), rules.limits);
-      if (imported.clips.empty())
-        throw UploadError(422, field + ": \"" + shown + "\" holds no animation");
-      clip_model = imported.model;
-      clip = std::move(imported.clips.front().clip);
-    }
-  } catch (const UploadError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw UploadError(422, field + ": " + rename_source(e.what(), upload.file(), shown));
-  }
-  if (!same_skeleton(*clip_model, model) && retarget) {
+  MotionUpload motion = load_motion(field, shown, ext, bytes, model, temp_root, rules);
+  if (!same_skeleton(*motion.model, model) && retarget) {
     try {
-      return {animator::retarget(*clip_model, clip, model).clip, nullptr};
+      animator::RetargetOptions options;
+      options.mapping = mapping;
+      options.mapping_origin = "mapping";
+      return {animator::retarget(*motion.model, motion.clip, model, options).clip, nullptr};
     } catch (const std::exception& e) {
       throw UploadError(422, field + ": \"" + shown + "\": cannot be retargeted onto the " +
                                  "session's character: " + e.what());
     }
   }
-  if (!same_skeleton(*clip_model, model)) {
+  if (!same_skeleton(*motion.model, model)) {
     throw UploadError(
         422,
-        field + ": \"" + shown + "\": its skeleton (" + std::to_string(clip_model->nlinks()) +
+        field + ": \"" + shown + "\": its skeleton (" + std::to_string(motion.model->nlinks()) +
             " links) does not match the session's character (" + std::to_string(model.nlinks()) +
             " links; rule: same link names, parents and joint types)",
         "skeleton_differs");
   }
-  return {std::move(clip), nullptr};
+  return {std::move(motion.clip), nullptr};
+}
+
+nlohmann::json clip_correspondence(const std::string& field,
+                                   const std::string& file_name,
+                                   const std::string& bytes,
+                                   const core::Model& model,
+                                   const std::string& temp_root,
+                                   const UploadRules& rules) {
+  const std::string ext = extension_of(file_name);
+  const std::string shown = safe_file_name(file_name, "upload");
+  check_motion_type(field, shown, ext, /*c3d_allowed=*/false);
+  check_upload(field, shown, ext, bytes, rules.caps);
+  const MotionUpload motion = load_motion(field, shown, ext, bytes, model, temp_root, rules);
+  const core::Model& S = *motion.model;
+  const animator::Correspondence c = animator::guess_correspondence(S, model);
+  nlohmann::json joints = nlohmann::json::array();
+  for (int s = 1; s < S.njoints; ++s) {
+    if (S.joint_type[s] == core::JointType::kFixed) continue;
+    const int t = c.target_of_source[s];
+    joints.push_back({{"source", S.link_name[s]},
+                      {"target", t > 0 ? nlohmann::json(model.link_name[t]) : nlohmann::json()}});
+  }
+  nlohmann::json links = nlohmann::json::array();
+  for (int t = 1; t < model.njoints; ++t) {
+    if (model.joint_type[t] != core::JointType::kFixed) links.push_back(model.link_name[t]);
+  }
+  return {{"source_convention", c.source_parts.convention},
+          {"target_convention", c.target_parts.convention},
+          {"same_skeleton", same_skeleton(S, model)},
+          {"joints", joints},
+          {"links", links}};
 }
 
 }  // namespace server

@@ -9,7 +9,11 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "animator/joint_names.hpp"
 #include "animator/session.hpp"
 #include "core/clip.hpp"
 
@@ -83,12 +87,27 @@ struct ClipUpload {
   core::Clip clip;
   std::shared_ptr<const animator::ClipMarkers> markers;  // a marker trial's, else null
 };
+/// `mapping`: the user's entries over the guessed correspondence when retargeting
+/// (docs/retargeting.md, "Mapping file"); one naming a joint or link that is not there is a 422.
 ClipUpload clip_from_upload(const std::string& field,
                             const std::string& file_name,
                             const std::string& bytes,
                             const core::Model& model,
                             const std::string& temp_root,
                             const UploadRules& rules = {},
-                            bool retarget = false);
+                            bool retarget = false,
+                            const std::vector<animator::MappingEntry>& mapping = {});
+
+/// The correspondence retargeting would guess for an uploaded motion file (.bvh, .glb, .gltf,
+/// .fbx, .dae) onto `model`, for the user to edit: {"source_convention", "target_convention",
+/// "same_skeleton": bool, "joints": [{"source": joint, "target": link | null}, ...] (every moving
+/// joint of the clip, file order), "links": [every moving link of the character]}.
+/// Caps and errors as for clip_from_upload. @throws UploadError
+nlohmann::json clip_correspondence(const std::string& field,
+                                   const std::string& file_name,
+                                   const std::string& bytes,
+                                   const core::Model& model,
+                                   const std::string& temp_root,
+                                   const UploadRules& rules = {});
 
 }  // namespace server

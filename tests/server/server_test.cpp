@@ -1,6 +1,7 @@
 // Integration tests of the server (server/server.hpp) over real sockets on ephemeral loopback
 // ports: the protocol end to end, the drag burst, reconnect and restart, and the security corpus.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -526,6 +527,79 @@ TEST_F(ServerTest, AFittedTrialsMarkersAreServedBesideItsClip) {
   request(*ws, {{"type", "redo"}}, 2);
   EXPECT_EQ(ws->read_until("state").at("markers").at("revision"), summary.at("revision"));
   EXPECT_EQ(c.Get("/api/sessions/" + s.id + "/markers", again)->status, 304);
+}
+
+// A clip of another skeleton: the page asks for the correspondence retargeting would guess, the
+// user edits it, and the upload retargets with their mapping; a mapping that names a link the
+// character lacks, or is not JSON, is a 422 naming it, and the session keeps its clip.
+TEST_F(ServerTest, RetargetingShowsItsGuessAndTakesTheUsersMapping) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  std::ifstream file(fixtures::data_dir() + "/bvh/mixamo_naming_freebvh.bvh", std::ios::binary);
+  const std::string clip((std::istreambuf_iterator<char>(file)), {});
+  ASSERT_GT(clip.size(), 100u);
+  auto c = http();
+  const Created s = create_session("human48");
+  const httplib::Headers auth{{"X-Session-Token", s.token}, {"Origin", origin()}};
+  const auto post = [&](const std::string& path, const std::string& mapping) {
+    httplib::MultipartFormDataItems items{{"clip", clip, "walk.bvh", "application/octet-stream"}};
+    if (!mapping.empty()) items.push_back({"mapping", mapping, "mapping.json", "application/json"});
+    return c.Post("/api/sessions/" + s.id + path, auth, items);
+  };
+
+  const auto guess = post("/clip/correspondence", "");
+  ASSERT_TRUE(guess);
+  ASSERT_EQ(guess->status, 200) << guess->body;
+  const json g = json::parse(guess->body);
+  EXPECT_EQ(g.at("same_skeleton"), false);
+  EXPECT_EQ(g.at("source_convention"), "mixamo");
+  std::map<std::string, json> target_of;
+  for (const json& j : g.at("joints")) target_of[j.at("source")] = j.at("target");
+  EXPECT_EQ(target_of.at("mixamorig:LeftHand"), "l_hand");
+  EXPECT_EQ(target_of.at("mixamorig:Hips"), "pelvis");
+  EXPECT_NE(std::find(g.at("links").begin(), g.at("links").end(), "r_hand"), g.at("links").end());
+  EXPECT_TRUE(snapshot(s).at("clip").is_null()) << "asking for the guess changed the session";
+
+  // retargeted as guessed, then with the left arm left out: its joints stop following
+  ASSERT_EQ(post("/clip?retarget=1", "")->status, 200);
+  const json guessed = snapshot(s);
+  const auto mapped = post("/clip?retarget=1", R"({"mixamorig:LeftArm": null,
+      "mixamorig:LeftForeArm": null, "mixamorig:LeftHand": null})");
+  ASSERT_TRUE(mapped);
+  ASSERT_EQ(mapped->status, 200) << mapped->body;
+  const json edited = snapshot(s);
+  const auto link_of = [](const json& snap, const std::string& name) {
+    for (const json& l : snap.at("links"))
+      if (l.at("name") == name) return l;
+    return json();
+  };
+  // the elbow's bend: the angle between upper arm and forearm
+  const auto bend = [&](const json& snap, const std::string& side) {
+    const auto q = [&](const std::string& name) {
+      const json R = link_of(snap, name).at("R");
+      return Eigen::Quaterniond(R[0], R[1], R[2], R[3]);
+    };
+    return q(side + "_uarm").angularDistance(q(side + "_farm"));
+  };
+  std::cout << "elbow bend at time 0, as guessed: left " << bend(guessed, "l") << ", right "
+            << bend(guessed, "r") << "; left arm unmapped: left " << bend(edited, "l") << ", right "
+            << bend(edited, "r") << " rad\n";
+  EXPECT_GT(bend(guessed, "l"), 0.2) << "the clip's left elbow is not bent at time 0";
+  EXPECT_LT(bend(edited, "l"), 0.1) << "the unmapped left elbow still bends with the clip";
+  EXPECT_NEAR(bend(edited, "r"), bend(guessed, "r"), 0.05) << "the right elbow followed the edit";
+
+  // a link the character does not have; text that is not JSON
+  const auto unknown = post("/clip?retarget=1", R"({"mixamorig:LeftHand": "l_paw"})");
+  ASSERT_TRUE(unknown);
+  EXPECT_EQ(unknown->status, 422);
+  const std::string why = json::parse(unknown->body).at("error");
+  EXPECT_NE(why.find("mapping"), std::string::npos) << why;
+  EXPECT_NE(why.find("l_paw"), std::string::npos) << why;
+  const auto broken = post("/clip?retarget=1", "{\"mixamorig:LeftHand\": ");
+  ASSERT_TRUE(broken);
+  EXPECT_EQ(broken->status, 422);
+  const std::string syntax = json::parse(broken->body).at("error");
+  EXPECT_EQ(syntax.rfind("mapping: line 1", 0), 0u) << syntax;
+  EXPECT_EQ(snapshot(s).at("links"), edited.at("links")) << "a refused mapping changed the clip";
 }
 
 TEST_F(ServerTest, OversizeMessageClosesWith1009) {
