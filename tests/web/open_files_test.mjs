@@ -184,6 +184,51 @@ test('Load clip with another skeleton can retarget it onto this character', { sk
   await context.close();
 });
 
+test('the mapping editor shows the guess, saves and loads a mapping, and retargets with it', { skip: noData }, async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  await page.setInputFiles('#clip-file', path.join(DATA_DIR, 'bvh', 'mixamo_naming_freebvh.bvh'));
+  await page.waitForSelector('#open-dialog:not([hidden]) #edit-mapping', { timeout: 30000 });
+  await page.click('#edit-mapping');
+  await page.waitForSelector('#mapping-table select', { timeout: 30000 });
+  const target = (source) => page.$eval(`#mapping-table select[data-source="${source}"]`, (s) => s.value);
+  const rows = await page.$$eval('#mapping-table select', (all) => all.length);
+  console.log(`mapping editor: ${rows} joints; LeftHand → ${await target('mixamorig:LeftHand')}`);
+  assert.equal(await target('mixamorig:LeftHand'), 'l_hand');
+  assert.equal(await target('mixamorig:Hips'), 'pelvis');
+  await page.screenshot({ path: path.join(out, 'mapping-editor.png') });
+  // leave the left arm out, save the mapping, and read it back
+  for (const joint of ['LeftArm', 'LeftForeArm', 'LeftHand']) await page.selectOption(`#mapping-table select[data-source="mixamorig:${joint}"]`, '');
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#mapping-save')]);
+  const saved = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
+  assert.equal(saved['mixamorig:LeftHand'], null);
+  assert.equal(saved['mixamorig:RightHand'], 'r_hand');
+  assert.equal(Object.keys(saved).length, rows);
+  await page.selectOption('#mapping-table select[data-source="mixamorig:LeftHand"]', 'l_hand');
+  const file = path.join(out, 'mapping.json');
+  fs.writeFileSync(file, JSON.stringify({ 'mixamorig:LeftHand': null, 'mixamorig:NoSuchJoint': 'l_hand' }));
+  await page.setInputFiles('#mapping-file', file);
+  await page.waitForFunction(() => /NoSuchJoint/.test(document.querySelector('#open-dialog .open-status')?.textContent || ''), null, { timeout: 5000 });
+  assert.equal(await target('mixamorig:LeftHand'), '', 'the loaded mapping did not set its row');
+  await page.click('#retarget-mapped');
+  await page.waitForSelector('#open-dialog', { state: 'hidden', timeout: 60000 });
+  const s = await server.snapshot(before.id, before.token);
+  // the left elbow, driven by nothing now, stays near its neutral bend at time 0
+  const R = (name) => s.links.find((l) => l.name === name).R;
+  const bend = (a, b) => {
+    const [p, q] = [R(a), R(b)];
+    const dot = Math.abs(p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3]);
+    return 2 * Math.acos(Math.min(1, dot));
+  };
+  console.log(`retargeted with the mapping: ${s.clip?.frames} frames; elbow bend left ${bend('l_uarm', 'l_farm').toFixed(3)}, right ${bend('r_uarm', 'r_farm').toFixed(3)} rad`);
+  assert.ok(s.clip && s.clip.frames > 30);
+  assert.ok(bend('l_uarm', 'l_farm') < 0.1, 'the unmapped left elbow bends with the clip');
+  assert.ok(bend('r_uarm', 'r_farm') > 0.1, 'the right elbow does not follow the clip');
+  assert.deepEqual(problems.filter((p) => !/NoSuchJoint/.test(p)), []);
+  await context.close();
+});
+
 /** Switches a view option of the bar over the 3D view (by its label). */
 const setView = (page, key, value) =>
   page.evaluate(
@@ -195,7 +240,7 @@ const setView = (page, key, value) =>
     [key, value],
   );
 
-test('Load clip with a marker trial fits it onto the human figure, and draws its markers',  { skip: noData }, async () => {
+test('Load clip with a marker trial fits it onto the human figure, and draws its markers', { skip: noData }, async () => {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
   const { page, problems } = await openTab(context);
   const before = await sessionOf(page);

@@ -105,6 +105,19 @@ export function createApi() {
       return res.arrayBuffer();
     },
 
+    /** The correspondence retargeting would guess for a clip file (POST .../clip/correspondence). */
+    async clipCorrespondence(file) {
+      const form = new FormData();
+      form.append('clip', file, file.name);
+      const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip/correspondence`, {
+        method: 'POST',
+        headers: api.headers(),
+        body: form,
+      });
+      if (!res.ok) throw await failure('mapping', res);
+      return res.json();
+    },
+
     /** The measured markers of the trial the clip was fitted to (GET .../markers). */
     async markers() {
       const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/markers`, { headers: api.headers() });
@@ -112,10 +125,12 @@ export function createApi() {
       return res.json();
     },
 
-    /** Loads a clip onto the character; `retarget`: a clip of another skeleton is retargeted onto it. */
-    async uploadClip(file, { retarget = false } = {}) {
+    /** Loads a clip onto the character; `retarget`: a clip of another skeleton is retargeted onto it,
+     *  with `mapping` ({source joint: target link or null}) over the guessed correspondence. */
+    async uploadClip(file, { retarget = false, mapping = null } = {}) {
       const form = new FormData();
       form.append('clip', file, file.name);
+      if (mapping) form.append('mapping', new Blob([JSON.stringify(mapping)], { type: 'application/json' }), 'mapping.json');
       const query = retarget ? '?retarget=1' : '';
       const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip${query}`, {
         method: 'POST',

@@ -3,7 +3,9 @@
 // clip) and the sessions saved from this browser. Opening makes a new session and this tab
 // switches to it; the current session stays saved and is listed here and in the Sessions panel.
 // It also asks what to do with a clip whose skeleton differs from the character's ("Load clip…"):
-// open it as its own character, retarget it onto this one, or leave it.
+// open it as its own character, retarget it onto this one (as guessed, or with a mapping the user
+// edits, saves and loads: which of the clip's joints drives which of the character's links), or
+// leave it.
 
 import { h, uploadTooLarge } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
@@ -152,19 +154,94 @@ export function createOpenDialog(state, api, switchSession) {
   }
 
   // the clip retargeted onto this character (animator/retarget.hpp): it becomes the clip here
-  async function retargetHere(file) {
+  async function retargetHere(file, mapping = null) {
     const status = card.querySelector('.open-status');
     if (status) status.textContent = `retargeting ${file.name}…`;
-    card.querySelectorAll('button').forEach((b) => (b.disabled = true));
+    card.querySelectorAll('button, select').forEach((b) => (b.disabled = true));
     try {
-      const r = await api.uploadClip(file, { retarget: true });
+      const r = await api.uploadClip(file, { retarget: true, mapping });
       notify(`${file.name} retargeted: ${r.frames} frames at ${(1 / r.frame_time).toFixed(1)} fps`);
       close();
     } catch (err) {
-      card.querySelectorAll('button').forEach((b) => (b.disabled = false));
+      card.querySelectorAll('button, select').forEach((b) => (b.disabled = false));
       if (status) status.textContent = err.message;
       notify(err.message, 'error');
     }
+  }
+
+  /** The mapping editor: one row per moving joint of the clip, with the character's link it
+   *  drives (the server's guess first); saved and loaded as the mapping file of
+   *  docs/retargeting.md ({"source joint": "target link" or null}). */
+  async function editMapping(file, message) {
+    const setStatus = (text) => {
+      const status = card.querySelector('.open-status');
+      if (status) status.textContent = text;
+    };
+    setStatus(`reading ${file.name}…`);
+    let guess;
+    try {
+      guess = await api.clipCorrespondence(file);
+    } catch (err) {
+      setStatus(err.message);
+      notify(err.message, 'error');
+      return;
+    }
+    const selects = new Map(); // source joint -> <select>
+    const rows = guess.joints.map(({ source, target }) => {
+      const select = h('select.mapping-target', { 'data-source': source, title: `the link ${source} drives` }, h('option', { value: '' }, '(none)'), ...guess.links.map((l) => h('option', { value: l }, l)));
+      select.value = target ?? '';
+      selects.set(source, select);
+      return h('tr', {}, h('td', {}, source), h('td', {}, select));
+    });
+    const current = () => Object.fromEntries([...selects].map(([source, select]) => [source, select.value || null]));
+    const save = () => {
+      const url = URL.createObjectURL(new Blob([`${JSON.stringify(current(), null, 2)}\n`], { type: 'application/json' }));
+      const a = h('a', { href: url, download: `${file.name.replace(/\.[^.]+$/, '')}-mapping.json` });
+      document.body.appendChild(a);
+      a.click();
+      a.remove();
+      setTimeout(() => URL.revokeObjectURL(url), 1000);
+    };
+    const loadInput = h('input#mapping-file', { type: 'file', accept: '.json', hidden: true });
+    loadInput.addEventListener('change', async () => {
+      const chosen = loadInput.files[0];
+      loadInput.value = '';
+      if (!chosen) return;
+      try {
+        const doc = JSON.parse(await chosen.text());
+        if (!doc || typeof doc !== 'object' || Array.isArray(doc)) throw new Error('expected an object of source joint name → target link name or null');
+        const unknown = [];
+        for (const [source, target] of Object.entries(doc)) {
+          const select = selects.get(source);
+          if (!select) unknown.push(source);
+          else if (target === null || guess.links.includes(target)) select.value = target ?? '';
+          else unknown.push(`${source} → ${target}`);
+        }
+        const text = unknown.length ? `${chosen.name}: not in this clip or character, left as they were: ${unknown.join(', ')}` : `${chosen.name}: loaded`;
+        setStatus(text);
+        notify(text, unknown.length ? 'error' : 'info');
+      } catch (err) {
+        const text = `${chosen.name}: ${err.message}`;
+        setStatus(text);
+        notify(text, 'error');
+      }
+    });
+    const conventions = [guess.source_convention, guess.target_convention].map((c) => c || 'unrecognised').join(' → ');
+    show(
+      h('h2', {}, 'Retarget with a mapping'),
+      h('p', {}, `Which link of ${state.character?.name || 'the character'} each joint of ${file.name} drives (names read as ${conventions}). “(none)”: the joint drives nothing.`),
+      h('div.mapping-table', {}, h('table#mapping-table', {}, h('tbody', {}, ...rows))),
+      h('p.open-status'),
+      loadInput,
+      h(
+        'div.open-actions',
+        {},
+        h('button#retarget-mapped', { type: 'button', onclick: () => retargetHere(file, current()) }, 'Retarget with this mapping'),
+        h('button#mapping-save', { type: 'button', title: 'Download the mapping as JSON (pindrag retarget --mapping reads it too)', onclick: save }, 'Save mapping…'),
+        h('button#mapping-load', { type: 'button', title: 'Set the rows from a mapping file', onclick: () => loadInput.click() }, 'Load mapping…'),
+        h('button', { type: 'button', onclick: () => offerOwnCharacter(file, message) }, 'Back'),
+      ),
+    );
   }
 
   /** A clip of another skeleton was refused: offer to open the file as its own character, or to
@@ -181,6 +258,7 @@ export function createOpenDialog(state, api, switchSession) {
         {},
         h('button#open-as-own', { type: 'button', onclick: () => openCreated(api.createSessionFromFile(file), file.name) }, 'Open it as its own character'),
         h('button#retarget-clip', { type: 'button', onclick: () => retargetHere(file) }, `Retarget it onto ${character}`),
+        h('button#edit-mapping', { type: 'button', title: 'See and change which joint drives which link before retargeting', onclick: () => editMapping(file, message) }, 'Edit the mapping…'),
         h('button', { type: 'button', onclick: close }, 'Cancel'),
       ),
     );
