@@ -5,6 +5,7 @@
 // receiving the first pose frame whose "last applied seq" is N.
 //
 //   server_bench [--seconds S] [--sessions N,N,...]   (default: 5 s; 1 and 50 sessions)
+//   server_bench --stages [--seconds S]   (one session's latency by stage, stage_run below)
 //
 // With --mixed it runs the server under mixed load instead (bench/server_load_mixed.hpp):
 //
@@ -18,6 +19,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -66,6 +68,89 @@ void latency_run(server::Server& srv, int sessions, double seconds) {
       all.empty() ? NAN : *std::max_element(all.begin(), all.end()), failures.load());
 }
 
+// Where one session's drag latency goes, by stage: three round trips at 60 Hz on one connection,
+// taken in turn, and the solver's own time from the reports (sent every 100 ms):
+//   echo:  a second hello, answered with an error by the I/O thread (socket and WebSocket only);
+//   actor: a pause, acknowledged by the session's actor (adds the hand-off to a pool worker and
+//          back to the I/O thread);
+//   drag:  drag_move until the pose that applied it (adds the solve and the pose frame).
+void stage_run(server::Server& srv, double seconds) {
+  const SessionRef s = create_session(srv.http_port());
+  const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
+  server_test::WsClient ws(srv.ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin);
+  ws.send({{"type", "hello"}, {"protocol", 1}});
+  const nlohmann::json snapshot = ws.read_until("snapshot");
+  std::array<double, 3> start{};
+  for (const auto& l : snapshot.at("links")) {
+    if (l.at("name") == "r_hand") start = {l.at("p")[0], l.at("p")[1], l.at("p")[2]};
+  }
+  ws.send({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}});
+  std::vector<double> echo, actor, drag, solve;
+  const auto note_report = [&](const nlohmann::json& j) {
+    if (j.value("type", "") == "report") solve.push_back(j.at("microseconds").get<double>() / 1e3);
+  };
+  const auto t_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(seconds));
+  auto next = Clock::now();
+  std::uint32_t seq = 0;
+  for (int tick = 0; Clock::now() < t_end; ++tick) {
+    std::this_thread::sleep_until(next);
+    next += std::chrono::microseconds(16667);
+    const int id = 1000 + tick;
+    const auto sent = Clock::now();
+    if (tick % 3 == 0) {
+      ws.send({{"type", "hello"}, {"protocol", 1}, {"id", id}});
+      for (;;) {
+        const auto m = ws.read();
+        if (!m.text) continue;
+        const nlohmann::json j = m.json();
+        note_report(j);
+        if (j.value("type", "") == "error" && j.value("id", -1) == id) break;
+      }
+      echo.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
+    } else if (tick % 3 == 1) {
+      ws.send({{"type", "pause"}, {"id", id}});
+      for (;;) {
+        const auto m = ws.read();
+        if (!m.text) continue;
+        const nlohmann::json j = m.json();
+        note_report(j);
+        if (j.value("type", "") == "ack" && j.value("id", -1) == id) break;
+      }
+      actor.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
+    } else {
+      ++seq;
+      const double phase = 2 * M_PI * seq / 40.0;  // a 2 s circle of 10 cm radius
+      ws.send(
+          {{"type", "drag_move"},
+           {"seq", seq},
+           {"target",
+            {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
+      for (;;) {
+        const auto m = ws.read();
+        if (m.text) {
+          note_report(m.json());
+          continue;
+        }
+        if (server_test::decode_pose(m.data).last_seq >= seq) break;
+      }
+      drag.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
+    }
+    if (Clock::now() > next) next = Clock::now();
+  }
+  ws.send({{"type", "drag_end"}});
+  ws.close();
+  const auto row = [](const char* what, const std::vector<double>& v) {
+    std::printf("  %-44s samples %4zu, p50 %.3f ms, p90 %.3f ms, p99 %.3f ms\n", what, v.size(),
+                percentile(v, 50), percentile(v, 90), percentile(v, 99));
+  };
+  std::printf("stages of one session's round trips at 60 Hz for %.0f s:\n", seconds);
+  row("echo (I/O thread only)", echo);
+  row("actor (I/O -> pool worker -> I/O)", actor);
+  row("drag_move -> pose (the above, solve, pose)", drag);
+  row("solve, as the server's reports time it", solve);
+}
+
 // A client that subscribes and then reads nothing for `stall` seconds while another client drags
 // the same session at 60 Hz: the server keeps one pending pose for it, so memory stays flat.
 void stalled_reader_run(server::Server& srv, double stall) {
@@ -110,6 +195,7 @@ void stalled_reader_run(server::Server& srv, double stall) {
 
 constexpr const char* kUsage =
     "usage: server_bench [--seconds S] [--sessions N,N,...]\n"
+    "       server_bench --stages [--seconds S]\n"
     "       server_bench --mixed [--seconds S] [--sessions N] [--mixed-clients K] "
     "[--max-rss-mib M] [--max-live-sessions L]\n";
 
@@ -117,13 +203,17 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   double seconds = 5;
   std::vector<int> session_counts{1, 50};
-  bool mixed = false, seconds_given = false, sessions_given = false;
+  bool mixed = false, stages = false, seconds_given = false, sessions_given = false;
   server_bench::MixedLoadOptions mixed_options;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string flag = argv[i];
       if (flag == "--mixed") {
         mixed = true;
+        continue;
+      }
+      if (flag == "--stages") {
+        stages = true;
         continue;
       }
       if (i + 1 >= argc) throw std::invalid_argument(flag);
@@ -172,8 +262,12 @@ int main(int argc, char** argv) {
   server::Server srv(options);
   srv.start();
   std::printf("cores: %u\n", std::thread::hardware_concurrency());
-  for (int n : session_counts) latency_run(srv, n, seconds);
-  stalled_reader_run(srv, 10);
+  if (stages) {
+    stage_run(srv, seconds);
+  } else {
+    for (int n : session_counts) latency_run(srv, n, seconds);
+    stalled_reader_run(srv, 10);
+  }
   srv.stop();
   fs::remove_all(web);
   return 0;
