@@ -120,12 +120,7 @@ void stage_run(server::Server& srv, double seconds) {
       actor.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
     } else {
       ++seq;
-      const double phase = 2 * M_PI * seq / 40.0;  // a 2 s circle of 10 cm radius
-      ws.send(
-          {{"type", "drag_move"},
-           {"seq", seq},
-           {"target",
-            {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
+      ws.send(server_bench::circle_drag_move(start, seq, 40.0));  // every 3rd tick: a 2 s circle
       for (;;) {
         const auto m = ws.read();
         if (m.text) {

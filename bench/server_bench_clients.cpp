@@ -41,6 +41,16 @@ SessionRef create_session(int port) {
   return {j.at("id"), j.at("token")};
 }
 
+nlohmann::json circle_drag_move(const std::array<double, 3>& start,
+                                std::uint32_t seq,
+                                double frames_per_circle) {
+  const double phase = 2 * M_PI * seq / frames_per_circle;
+  return {{"type", "drag_move"},
+          {"seq", seq},
+          {"target",
+           {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}};
+}
+
 void drag_client(const server::Server& srv,
                  const SessionRef& s,
                  double seconds,
@@ -58,13 +68,8 @@ void drag_client(const server::Server& srv,
     for (std::uint32_t seq = 1; Clock::now() < t_end; ++seq) {
       std::this_thread::sleep_until(next);
       next += kFramePeriod;
-      const double phase = 2 * M_PI * seq / 120.0;  // a 2 s circle of 10 cm radius
       const auto sent = Clock::now();
-      ws.send(
-          {{"type", "drag_move"},
-           {"seq", seq},
-           {"target",
-            {start[0] + 0.1 * std::cos(phase) - 0.1, start[1] + 0.1 * std::sin(phase), start[2]}}});
+      ws.send(circle_drag_move(start, seq, 120.0));  // a 2 s circle
       for (;;) {
         const auto m = ws.read();
         if (m.text) continue;

@@ -3,7 +3,10 @@
 // to the pose frame that applies it, percentiles, and the process's resident memory.
 #pragma once
 
+#include <array>
 #include <atomic>
+#include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -17,6 +20,12 @@ struct SessionRef {
 
 /// A human48 session. @throws std::runtime_error unless the server answers 201
 SessionRef create_session(int port);
+
+/// drag_move `seq` of a drag around a circle of 10 cm radius through `start` (world, m), once
+/// around every `frames_per_circle` moves.
+nlohmann::json circle_drag_move(const std::array<double, 3>& start,
+                                std::uint32_t seq,
+                                double frames_per_circle);
 
 /// Drags the right hand of `s` on a 2 s circle at 60 Hz for `seconds`, appending each drag_move →
 /// pose round trip (ms) to `latencies`; a client that fails prints why and increments `failures`.
