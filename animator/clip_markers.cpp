@@ -40,7 +40,7 @@ std::shared_ptr<const ClipMarkers> make_clip_markers(const core::Model& model,
                                                      ik::MarkerSet set,
                                                      ik::MarkerTrajectories measured) {
   if (const std::string e = check_clip_markers(model, set, measured); !e.empty())
-    throw std::invalid_argument("markers: " + e);
+    throw std::invalid_argument(e);
   auto out = std::make_shared<ClipMarkers>();
   out->set = std::move(set);
   out->measured = std::move(measured);

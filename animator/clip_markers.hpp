@@ -23,7 +23,7 @@ struct ClipMarkers {
 };
 
 /// Markers that pass check_clip_markers for `model`, with a fresh revision.
-/// @throws std::invalid_argument naming the rule broken
+/// @throws std::invalid_argument whose what() is the rule broken
 std::shared_ptr<const ClipMarkers> make_clip_markers(const core::Model& model,
                                                      ik::MarkerSet set,
                                                      ik::MarkerTrajectories measured);

@@ -264,8 +264,11 @@ std::shared_ptr<const ClipMarkers> read_clip_markers(JsonFields& f,
       t.present.push_back(1);
     }
   }
-  if (const std::string e = check_clip_markers(m, set, t); !e.empty()) f.fail(markers, e);
-  return make_clip_markers(m, std::move(set), std::move(t));
+  try {
+    return make_clip_markers(m, std::move(set), std::move(t));
+  } catch (const std::invalid_argument& e) {
+    f.fail(markers, e.what());
+  }
 }
 
 std::string check_document_markers(const Document& d) {

@@ -79,15 +79,21 @@ void stage_run(server::Server& srv, double seconds) {
   const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
   server_test::WsClient ws(srv.ws_port(), "/ws?session=" + s.id + "&token=" + s.token, origin);
   ws.send({{"type", "hello"}, {"protocol", 1}});
-  const nlohmann::json snapshot = ws.read_until("snapshot");
-  std::array<double, 3> start{};
-  for (const auto& l : snapshot.at("links")) {
-    if (l.at("name") == "r_hand") start = {l.at("p")[0], l.at("p")[1], l.at("p")[2]};
-  }
+  const std::array<double, 3> start = server_bench::hand_position(ws.read_until("snapshot"));
   ws.send({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", start}});
   std::vector<double> echo, actor, drag, solve;
   const auto note_report = [&](const nlohmann::json& j) {
     if (j.value("type", "") == "report") solve.push_back(j.at("microseconds").get<double>() / 1e3);
+  };
+  // reads until the text message of `type` answering request `id`, noting reports on the way
+  const auto await_reply = [&](const char* type, int id) {
+    for (;;) {
+      const auto m = ws.read();
+      if (!m.text) continue;
+      const nlohmann::json j = m.json();
+      note_report(j);
+      if (j.value("type", "") == type && j.value("id", -1) == id) return;
+    }
   };
   const auto t_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                         std::chrono::duration<double>(seconds));
@@ -100,23 +106,11 @@ void stage_run(server::Server& srv, double seconds) {
     const auto sent = Clock::now();
     if (tick % 3 == 0) {
       ws.send({{"type", "hello"}, {"protocol", 1}, {"id", id}});
-      for (;;) {
-        const auto m = ws.read();
-        if (!m.text) continue;
-        const nlohmann::json j = m.json();
-        note_report(j);
-        if (j.value("type", "") == "error" && j.value("id", -1) == id) break;
-      }
+      await_reply("error", id);
       echo.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
     } else if (tick % 3 == 1) {
       ws.send({{"type", "pause"}, {"id", id}});
-      for (;;) {
-        const auto m = ws.read();
-        if (!m.text) continue;
-        const nlohmann::json j = m.json();
-        note_report(j);
-        if (j.value("type", "") == "ack" && j.value("id", -1) == id) break;
-      }
+      await_reply("ack", id);
       actor.push_back(std::chrono::duration<double, std::milli>(Clock::now() - sent).count());
     } else {
       ++seq;

@@ -24,14 +24,14 @@ using Clock = std::chrono::steady_clock;
 
 constexpr auto kFramePeriod = std::chrono::microseconds(16667);  // 60 Hz
 
+}  // namespace
+
 std::array<double, 3> hand_position(const json& snapshot) {
   for (const json& l : snapshot.at("links")) {
     if (l.at("name") == "r_hand") return {l.at("p")[0], l.at("p")[1], l.at("p")[2]};
   }
   throw std::runtime_error("no r_hand");
 }
-
-}  // namespace
 
 SessionRef create_session(int port) {
   httplib::Client c("127.0.0.1", port);

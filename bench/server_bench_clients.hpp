@@ -21,6 +21,9 @@ struct SessionRef {
 /// A human48 session. @throws std::runtime_error unless the server answers 201
 SessionRef create_session(int port);
 
+/// The right hand's position in a snapshot (world, m). @throws std::runtime_error without one
+std::array<double, 3> hand_position(const nlohmann::json& snapshot);
+
 /// drag_move `seq` of a drag around a circle of 10 cm radius through `start` (world, m), once
 /// around every `frames_per_circle` moves.
 nlohmann::json circle_drag_move(const std::array<double, 3>& start,

@@ -37,9 +37,6 @@ void send_json(httplib::Response& res, int status, const json& body) {
   res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
 }
 
-// Whether the request is a multipart form with a file field "clip"; else a 400 is sent.
-bool has_clip_file(const httplib::Request& req, httplib::Response& res);
-
 // The multipart field "mapping" of a retargeting upload: a mapping document (docs/retargeting.md,
 // "Mapping file"). @throws UploadError 422 naming the field and the rule
 std::vector<animator::MappingEntry> mapping_field(const httplib::MultipartFormData& field) {
@@ -56,6 +53,7 @@ void send_error(httplib::Response& res, int status, const std::string& message) 
   send_json(res, status, json{{"error", message}});
 }
 
+// Whether the request is a multipart form with a file field "clip"; else a 400 is sent.
 bool has_clip_file(const httplib::Request& req, httplib::Response& res) {
   if (req.is_multipart_form_data() && req.has_file("clip")) return true;
   send_error(res, 400, "clip: a multipart file field \"clip\" is required");
