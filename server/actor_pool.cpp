@@ -74,6 +74,41 @@ void ActorPool::remove(Job* job) {
   states_.erase(it);
 }
 
+bool ActorPool::run_here_if_idle(Job* job) {
+  std::unique_lock lock(mutex_);
+  State& state = states_[job];
+  if (state.queued || state.running || state.removing) {
+    if (!state.queued && !state.running && !state.deadline) states_.erase(job);
+    return false;
+  }
+  state.running = true;
+  run_step(job, lock);
+  return true;
+}
+
+void ActorPool::run_step(Job* job, std::unique_lock<std::mutex>& lock) {
+  lock.unlock();
+  const Job* outer = std::exchange(t_running_job, job);
+  try {
+    job->step();
+  } catch (const std::exception& e) {
+    std::cerr << "pindrag serve: a session step failed: " << e.what() << "\n";
+  }
+  t_running_job = outer;
+  lock.lock();
+  const auto it = states_.find(job);  // gone when the step removed its own job
+  if (it != states_.end()) {
+    State& after = it->second;
+    after.running = false;
+    if (std::exchange(after.again, false)) {
+      make_ready(job, after);
+    } else if (!after.queued && !after.deadline) {
+      states_.erase(it);
+    }
+  }
+  step_done_.notify_all();
+}
+
 void ActorPool::make_ready(Job* job, State& state) {
   if (state.removing) return;
   if (state.running) {
@@ -107,26 +142,7 @@ void ActorPool::work() {
       State& state = states_.at(job);
       state.queued = false;
       state.running = true;
-      lock.unlock();
-      t_running_job = job;
-      try {
-        job->step();
-      } catch (const std::exception& e) {
-        std::cerr << "pindrag serve: a session step failed: " << e.what() << "\n";
-      }
-      t_running_job = nullptr;
-      lock.lock();
-      const auto it = states_.find(job);  // gone when the step removed its own job
-      if (it != states_.end()) {
-        State& after = it->second;
-        after.running = false;
-        if (std::exchange(after.again, false)) {
-          make_ready(job, after);
-        } else if (!after.queued && !after.deadline) {
-          states_.erase(it);
-        }
-      }
-      step_done_.notify_all();
+      run_step(job, lock);
       continue;
     }
     if (stopping_) return;

@@ -47,6 +47,12 @@ class ActorPool {
   void wake(Job* job);
   /// Runs `job` at `when` unless it runs earlier; replaces the deadline it had. nullopt: none.
   void wake_at(Job* job, std::optional<Clock::time_point> when);
+  /// Runs one step of `job` on the calling thread now, as a worker would, when no worker has it
+  /// queued or running; returns false without running it otherwise. A wake that arrives while it
+  /// runs makes a worker run it once more afterwards. For callers that hand a job a little work
+  /// and would rather do it than pay for waking a worker (the server's I/O thread, for a drag
+  /// sample): the step then delays what else that thread does.
+  bool run_here_if_idle(Job* job);
   /// After this returns `job` is not running and never runs again (until woken anew). Waits for
   /// a step in progress, unless called from that step itself.
   void remove(Job* job);
@@ -65,6 +71,8 @@ class ActorPool {
   };
 
   void work();
+  // runs `job` (marked running) with `lock` released, then settles its state and relocks
+  void run_step(Job* job, std::unique_lock<std::mutex>& lock);
   void make_ready(Job* job, State& state);
   void forget_deadline(Job* job, State& state);
 

@@ -19,6 +19,31 @@ std::string not_saved(const animator::SessionWriteError& e) {
   return "not saved (" + std::generic_category().message(e.error()) + "), so not applied";
 }
 
+// set while post() runs a step on its caller's thread (SessionActor::kInlineTickBudget)
+thread_local bool t_posting_thread_steps = false;
+
+// How much of its time a posting thread may spend in the steps it runs itself: the allowance
+// refills at kInlineShare of wall time up to kInlineBurst, and each step run here spends its
+// wall time. One session's drag costs well under 1 % of the I/O thread; with many sessions
+// dragging at once the allowance runs out and their samples go to the pool's workers, so the
+// I/O thread keeps reading and writing for everyone else.
+constexpr double kInlineShare = 0.1;
+constexpr Clock::duration kInlineBurst = std::chrono::milliseconds(2);
+struct InlineAllowance {
+  Clock::time_point refilled{};
+  Clock::duration left = kInlineBurst;
+};
+thread_local InlineAllowance t_inline_allowance;
+
+bool inline_allowance_left(Clock::time_point now) {
+  auto& a = t_inline_allowance;
+  const auto refill =
+      std::chrono::duration_cast<Clock::duration>((now - a.refilled) * kInlineShare);
+  a.left = std::min(kInlineBurst, a.left + refill);
+  a.refilled = now;
+  return a.left > Clock::duration::zero();
+}
+
 }  // namespace
 
 SessionActor::SessionActor(std::string id,
@@ -89,6 +114,7 @@ void SessionActor::unsubscribe(std::uint64_t connection) {
 }
 
 void SessionActor::post(std::uint64_t connection, ClientRequest request) {
+  bool step_here = false;
   if (const auto* move = std::get_if<DragMove>(&request.message)) {
     std::lock_guard lock(mutex_);
     ++stats_.drag_samples_received;
@@ -105,7 +131,23 @@ void SessionActor::post(std::uint64_t connection, ClientRequest request) {
     mailbox_->move = *move;
     if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
     // while a tick waits for kMinTickInterval, samples gather in the mailbox until it is due
-    if (!tick_deferred_) pool_->wake(this);
+    if (tick_deferred_) return;
+    step_here = queue_.empty() && last_tick_cost_ && *last_tick_cost_ <= kInlineTickBudget &&
+                inline_allowance_left(Clock::now());
+    if (!step_here) {
+      pool_->wake(this);
+      return;
+    }
+  }
+  if (step_here) {
+    // a cheap sample with nothing before it: solving it here saves waking a worker, and the
+    // worker waking this thread again for the pose
+    const auto started = Clock::now();
+    t_posting_thread_steps = true;
+    const bool ran = pool_->run_here_if_idle(this);
+    t_posting_thread_steps = false;
+    t_inline_allowance.left -= Clock::now() - started;
+    if (!ran) pool_->wake(this);  // a worker has it: make sure it sees this sample
     return;
   }
   Item item;
@@ -147,6 +189,13 @@ void SessionActor::step() {
   std::optional<DragSample> sample;
   {
     std::lock_guard lock(mutex_);
+    if (t_posting_thread_steps && !queue_.empty()) {
+      // a command arrived since post() chose to step here: commands (and the journal writes
+      // they may need) run on a worker, so this step leaves everything to it
+      pool_->wake(this);
+      return;
+    }
+    if (t_posting_thread_steps) ++stats_.steps_on_posting_thread;
     batch.swap(queue_);
     sample.swap(mailbox_);
     tick_deferred_ = false;
@@ -171,6 +220,12 @@ void SessionActor::step() {
     tick_owed_ = false;
   }
   if (pose_dirty_) broadcast_pose();
+  if (t_posting_thread_steps && was_moving_ && !session_->needs_tick()) {
+    // the figure came to rest: a worker records it in the journal (this thread writes no files)
+    std::lock_guard lock(mutex_);
+    if (!stopping_) pool_->wake(this);
+    return;
+  }
   if (was_moving_ && !session_->needs_tick()) {
     // the readouts show the state the figure came to rest in, not the last one sent in motion
     if (held_report_) broadcast_text(*std::exchange(held_report_, std::nullopt));
@@ -351,6 +406,8 @@ void SessionActor::tick() {
   {
     std::lock_guard lock(mutex_);
     ++stats_.ticks;
+    last_tick_cost_ = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - now);
+    stats_.last_tick_cost = *last_tick_cost_;
   }
   if (result.pose_changed) pose_dirty_ = true;
   if (result.committed) after_edit();

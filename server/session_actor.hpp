@@ -2,7 +2,9 @@
 // steps run on a shared ActorPool (server/actor_pool.hpp), one step at a time, so the number of
 // threads does not grow with the number of sessions.
 //
-// Thread contract: every public function may be called from any thread; they only enqueue.
+// Thread contract: every public function may be called from any thread; they only enqueue,
+// except that post() of a cheap drag sample may run the step on the calling thread
+// (kInlineTickBudget), so the caller must not hold a lock a step could need.
 // Commands (edits, subscriptions, calls from HTTP handlers) run in the order they were posted;
 // `drag_move` samples go into a latest-wins mailbox, so a burst of samples is applied as one.
 // A sample is flushed into the ordered queue when a command arrives after it, so a drag_end never
@@ -66,6 +68,8 @@ struct ActorStats {
   std::uint64_t save_failures = 0;
   std::uint64_t snapshots = 0;
   std::uint64_t pose_frames = 0;
+  std::uint64_t steps_on_posting_thread = 0;    // drag samples solved by post()'s caller
+  std::chrono::microseconds last_tick_cost{0};  // wall time of the last solver tick
 };
 
 class SessionActor : private ActorPool::Job {
@@ -74,6 +78,10 @@ class SessionActor : private ActorPool::Job {
   static constexpr std::chrono::microseconds kMinTickInterval{2000};
   /// Wall time between ticks while playing or settling with no new drag sample.
   static constexpr std::chrono::microseconds kTickPeriod{16667};
+  /// A drag sample posted when the actor is idle with no command queued is solved on the
+  /// posting thread (the server's I/O thread) if the last tick took at most this long: two
+  /// thread wake-ups cost more than such a solve. Slower sessions always run on a worker.
+  static constexpr std::chrono::microseconds kInlineTickBudget{250};
 
   /// `journal` null: the session is not saved. Steps run on `pool`.
   SessionActor(std::string id,
@@ -250,6 +258,7 @@ class SessionActor : private ActorPool::Job {
   std::optional<DragSample> mailbox_;
   bool stopping_ = false;
   bool tick_deferred_ = false;  // a sample's tick waits for kMinTickInterval: samples gather
+  std::optional<std::chrono::microseconds> last_tick_cost_;  // wall time of the last tick
   ActorStats stats_;
 
   // the actor's steps only

@@ -147,6 +147,36 @@ TEST(ActorPool, AStepMayRemoveItsOwnJob) {
   EXPECT_EQ(pool.jobs(), 0u);
 }
 
+TEST(ActorPool, RunHereIfIdleRunsTheStepOnTheCallingThreadUnlessAWorkerHasIt) {
+  ActorPool pool(2);
+  CountingJob job;
+  ASSERT_TRUE(pool.run_here_if_idle(&job));
+  EXPECT_EQ(job.steps.load(), 1);
+  EXPECT_EQ(job.threads(), std::set<std::thread::id>{std::this_thread::get_id()});
+  EXPECT_EQ(pool.jobs(), 0u);
+
+  // a wake that arrives during a step run here makes a worker run it once more
+  std::atomic<bool> woke{false};
+  job.on_step = [&] {
+    if (!woke.exchange(true)) pool.wake(&job);
+  };
+  ASSERT_TRUE(pool.run_here_if_idle(&job));
+  ASSERT_TRUE(eventually([&] { return job.steps.load() == 3 && pool.jobs() == 0; }));
+  EXPECT_EQ(job.threads().size(), 2u);  // this thread and a worker
+
+  // while a worker runs the job, the caller does not: the job never overlaps itself
+  CountingJob slow(50ms);
+  pool.wake(&slow);
+  ASSERT_TRUE(eventually([&] { return slow.threads().size() == 1; }));
+  EXPECT_FALSE(pool.run_here_if_idle(&slow));
+  ASSERT_TRUE(eventually([&] { return pool.jobs() == 0; }));
+  EXPECT_EQ(slow.steps.load(), 1);
+  EXPECT_EQ(slow.threads().count(std::this_thread::get_id()), 0u);
+  EXPECT_FALSE(slow.overlapped.load());
+  pool.remove(&slow);
+  pool.remove(&job);
+}
+
 TEST(ActorPool, ZeroThreadsMeansOnePerCoreAndAtLeastTwo) {
   ActorPool pool(0);
   EXPECT_GE(pool.threads(), 2u);

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "io/bundled_characters.hpp"
@@ -41,6 +42,7 @@ class Recorder final : public server::SessionSubscriber {
   void send_text(std::string message) override {
     std::lock_guard lock(mutex_);
     texts_.push_back(json::parse(message));
+    text_threads_.push_back(std::this_thread::get_id());
     changed_.notify_all();
   }
   void send_pose(std::string frame) override {
@@ -70,6 +72,16 @@ class Recorder final : public server::SessionSubscriber {
     }
     return out;
   }
+  // the thread that sent the `ack` or `error` with this id; none if it has not arrived
+  std::optional<std::thread::id> answer_thread(const json& id) const {
+    std::lock_guard lock(mutex_);
+    for (std::size_t i = 0; i < texts_.size(); ++i) {
+      const json& t = texts_[i];
+      if ((t.at("type") == "ack" || t.at("type") == "error") && t.value("id", json()) == id)
+        return text_threads_[i];
+    }
+    return std::nullopt;
+  }
   std::vector<json> texts_of_type(const std::string& type) const {
     std::lock_guard lock(mutex_);
     std::vector<json> out;
@@ -95,6 +107,7 @@ class Recorder final : public server::SessionSubscriber {
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::vector<json> texts_;
+  std::vector<std::thread::id> text_threads_;  // which thread sent each of texts_
   std::vector<std::string> poses_;
 };
 
@@ -211,6 +224,53 @@ TEST_F(SessionActorTest, DragSamplesAreCoalescedAndFlushedBeforeALaterCommand) {
   EXPECT_EQ(error.at("message").get<std::string>().rfind(
                 "drag_move.seq: must increase per connection", 0),
             0u);
+}
+
+// A drag sample posted to an idle actor whose ticks are cheap is solved by post()'s caller (the
+// server's I/O thread), which saves two thread wake-ups: its ack and its pose have arrived when
+// post() returns. Commands, and samples of a session whose ticks are costly, go to a worker.
+TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsOnAWorker) {
+  const server::Position p = hand();
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
+  ASSERT_TRUE(recorder_->wait_for_answer(1));
+  EXPECT_NE(recorder_->answer_thread(1), std::this_thread::get_id());
+  // the first samples make the actor tick, so it knows what a tick costs
+  std::uint32_t seq = 0;
+  for (; seq < 3; ++seq) {
+    post({{"type", "drag_move"}, {"seq", seq + 1}, {"target", p}, {"id", 100 + seq}});
+    ASSERT_TRUE(recorder_->wait_for_answer(100 + seq));
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const auto cost = actor_->stats().last_tick_cost;
+  const bool cheap = cost <= server::SessionActor::kInlineTickBudget;
+  const auto here_before = actor_->stats().steps_on_posting_thread;
+  int answered_here = 0;
+  constexpr int kSamples = 20;
+  for (int i = 0; i < kSamples; ++i, ++seq) {
+    const json id = 100 + seq;
+    post({{"type", "drag_move"},
+          {"seq", seq + 1},
+          {"target", {p[0], p[1] + 0.002 * i, p[2]}},
+          {"id", id}});
+    if (recorder_->answer_thread(id) == std::this_thread::get_id() &&
+        recorder_->last_pose_seq() == seq + 1) {
+      ++answered_here;  // acknowledged, solved and its pose sent before post() returned
+    }
+    ASSERT_TRUE(recorder_->wait_for_answer(id));
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // past kMinTickInterval
+  }
+  const auto here = actor_->stats().steps_on_posting_thread - here_before;
+  if (cheap) {
+    // a worker's periodic tick may hold the actor when a sample arrives: most, not all
+    EXPECT_GE(answered_here, kSamples / 2) << "ticks take " << cost.count() << " us";
+    EXPECT_EQ(here, static_cast<std::uint64_t>(answered_here));
+  } else {
+    EXPECT_EQ(answered_here, 0) << "ticks take " << cost.count() << " us";
+    EXPECT_EQ(here, 0u);
+  }
+  post({{"type", "drag_end"}, {"id", 2}});
+  ASSERT_TRUE(recorder_->wait_for_answer(2));
+  EXPECT_NE(recorder_->answer_thread(2), std::this_thread::get_id());
 }
 
 // Reports go out at most every 100 ms while the figure moves; the one the rate limit held back
