@@ -73,7 +73,8 @@ void latency_run(server::Server& srv, int sessions, double seconds) {
 //   echo:  a second hello, answered with an error by the I/O thread (socket and WebSocket only);
 //   actor: a pause, acknowledged by the session's actor (adds the hand-off to a pool worker and
 //          back to the I/O thread);
-//   drag:  drag_move until the pose that applied it (adds the solve and the pose frame).
+//   drag:  drag_move until the pose that applied it (the solve and the pose frame; a cheap
+//          sample is solved on the I/O thread, without the hand-off, SessionActor::post).
 void stage_run(server::Server& srv, double seconds) {
   const SessionRef s = create_session(srv.http_port());
   const std::string origin = "http://127.0.0.1:" + std::to_string(srv.http_port());
@@ -136,7 +137,7 @@ void stage_run(server::Server& srv, double seconds) {
   std::printf("stages of one session's round trips at 60 Hz for %.0f s:\n", seconds);
   row("echo (I/O thread only)", echo);
   row("actor (I/O -> pool worker -> I/O)", actor);
-  row("drag_move -> pose (the above, solve, pose)", drag);
+  row("drag_move -> pose (solve, pose)", drag);
   row("solve, as the server's reports time it", solve);
 }
 

@@ -210,12 +210,15 @@ void SessionActor::step() {
   }
   if (sample) new_drag_sample = apply_drag(*sample) || new_drag_sample;
 
-  // a new drag sample is solved at once unless the last tick was under kMinTickInterval ago
+  // a new drag sample is solved at once unless the last sample's tick was under kMinTickInterval
+  // ago. A periodic tick does not count: samples at 60 Hz drift against the ticks of kTickPeriod,
+  // and one arriving just after such a tick would wait up to kMinTickInterval for nothing.
   const auto now = Clock::now();
   const bool moving = session_->needs_tick();
   tick_owed_ = moving && (tick_owed_ || new_drag_sample);
-  if (moving &&
-      ((tick_owed_ && now - last_tick_ >= kMinTickInterval) || now - last_tick_ >= kTickPeriod)) {
+  const bool sample_due = tick_owed_ && now - last_sample_tick_ >= kMinTickInterval;
+  if (moving && (sample_due || now - last_tick_ >= kTickPeriod)) {
+    if (tick_owed_) last_sample_tick_ = now;
     tick();
     tick_owed_ = false;
   }
@@ -235,7 +238,8 @@ void SessionActor::step() {
   if (journal_) journal_->snapshot_if_due(/*settled=*/false);
 
   std::optional<Clock::time_point> next_tick;
-  if (was_moving_) next_tick = last_tick_ + (tick_owed_ ? kMinTickInterval : kTickPeriod);
+  if (was_moving_)
+    next_tick = tick_owed_ ? last_sample_tick_ + kMinTickInterval : last_tick_ + kTickPeriod;
   std::lock_guard lock(mutex_);
   if (stopping_) return;
   tick_deferred_ = was_moving_ && tick_owed_;

@@ -9,7 +9,8 @@
 // `drag_move` samples go into a latest-wins mailbox, so a burst of samples is applied as one.
 // A sample is flushed into the ordered queue when a command arrives after it, so a drag_end never
 // overtakes the drag_moves before it. The solver ticks only while Session::needs_tick() says
-// something moves, at most every kMinTickInterval, and immediately after a new drag sample.
+// something moves: every kTickPeriod, and immediately after a new drag sample unless the last
+// sample's tick was under kMinTickInterval ago.
 // A drag ends when the connection that began it unsubscribes (a client that vanished mid-drag).
 //
 // Durability (server/session_journal.hpp): an edit is acknowledged only once its journal record
@@ -74,7 +75,8 @@ struct ActorStats {
 
 class SessionActor : private ActorPool::Job {
  public:
-  /// Smallest wall time between two solver ticks (at most 500 ticks per second).
+  /// Smallest wall time between two ticks for drag samples (at most 500 per second, beside the
+  /// periodic ticks of kTickPeriod).
   static constexpr std::chrono::microseconds kMinTickInterval{2000};
   /// Wall time between ticks while playing or settling with no new drag sample.
   static constexpr std::chrono::microseconds kTickPeriod{16667};
@@ -267,6 +269,7 @@ class SessionActor : private ActorPool::Job {
   std::optional<std::uint64_t> drag_owner_;  // the connection whose drag_begin is active
   std::uint32_t frame_id_ = 0;
   std::chrono::steady_clock::time_point last_tick_{};
+  std::chrono::steady_clock::time_point last_sample_tick_{};  // the last tick a sample asked for
   std::chrono::steady_clock::time_point last_report_{};
   std::optional<std::string> held_report_;  // the newest report the rate limit held back
   bool was_moving_ = false;

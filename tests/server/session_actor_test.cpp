@@ -273,6 +273,38 @@ TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsO
   EXPECT_NE(recorder_->answer_thread(2), std::this_thread::get_id());
 }
 
+// While a drag lasts the actor also ticks every kTickPeriod. A sample that arrives just after
+// such a tick is solved at once: kMinTickInterval spaces the ticks samples ask for, not these.
+TEST_F(SessionActorTest, ASampleJustAfterAPeriodicTickIsSolvedAtOnce) {
+  const server::Position p = hand();
+  post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
+  ASSERT_TRUE(recorder_->wait_for_answer(1));
+  std::vector<double> waits_ms;
+  for (std::uint32_t seq = 1; seq <= 11; ++seq) {
+    // a periodic tick has just run (no sample asked for it since the last one)
+    const auto ticks = actor_->stats().ticks;
+    const auto give_up = std::chrono::steady_clock::now() + kPatience;
+    while (actor_->stats().ticks == ticks) {
+      ASSERT_LT(std::chrono::steady_clock::now(), give_up) << "no periodic tick while dragging";
+      std::this_thread::yield();
+    }
+    const auto posted = std::chrono::steady_clock::now();
+    post({{"type", "drag_move"}, {"seq", seq}, {"target", {p[0], p[1] + 0.002 * seq, p[2]}}});
+    while (recorder_->last_pose_seq() != seq) {  // polled without sleeping: sub-millisecond
+      ASSERT_LT(std::chrono::steady_clock::now(), give_up) << "sample " << seq << " not solved";
+      std::this_thread::yield();
+    }
+    waits_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - posted)
+            .count());
+  }
+  std::nth_element(waits_ms.begin(), waits_ms.begin() + 5, waits_ms.end());
+  // waiting for kMinTickInterval after the periodic tick would take close to 2 ms
+  EXPECT_LT(waits_ms[5], 1.0) << "median wait from sample to its pose, ms";
+  post({{"type", "drag_end"}, {"id", 2}});
+  ASSERT_TRUE(recorder_->wait_for_answer(2));
+}
+
 // Reports go out at most every 100 ms while the figure moves; the one the rate limit held back
 // when it came to rest still goes out, so the readouts never keep a drag that has ended.
 TEST_F(SessionActorTest, TheLastReportDescribesTheFigureAtRest) {
