@@ -13,6 +13,7 @@ Data::Data(const Model& model)
       Ic(model.njoints),
       crba_X_W(model.njoints),
       crba_S(Matrix6X::Zero(6, model.nv)),
+      crba_F(Eigen::MatrixXd::Zero(model.nv, 6)),
       M(Eigen::MatrixXd::Zero(model.nv, model.nv)),
       LTDL(Eigen::MatrixXd::Zero(model.nv, model.nv)),
       IA(model.njoints, Matrix6::Zero()),

@@ -33,6 +33,7 @@ struct Data {
   std::vector<SpatialInertia> Ic;   // composite inertia of the subtree of i            (njoints)
   std::vector<Transform> crba_X_W;  // pose of link i in the world                      (njoints)
   Matrix6X crba_S;                  // joint motion axes, as J                          (6 x nv)
+  Eigen::MatrixXd crba_F;           // row c: (Ic S_c)ᵀ, Ic the composite of c's joint  (nv x 6)
   Eigen::MatrixXd M;                // joint-space inertia H(q), symmetric              (nv x nv)
 
   // computed by factorize_mass_matrix: H = Lᵀ D L with the tree's sparsity (RBDA §6.5)
