@@ -53,8 +53,7 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorX
   }
   // Column a of H below the diagonal: the coordinates hanging from a are a..end-1 (the rest of
   // its joint, then its subtree, contiguous in depth-first order), so H(c, a) = F_cᵀ S_a for all
-  // of them is one product of a block of crba_F with S_a over contiguous memory. The upper
-  // triangle is its mirror.
+  // of them is one product of a block of crba_F with S_a over contiguous memory.
   Eigen::MatrixXd& M = data.M;
   const Eigen::Index nv = model.nv;
   const double* f0 = F.data();  // column k of crba_F starts at f0 + k nv

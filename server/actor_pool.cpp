@@ -76,12 +76,11 @@ void ActorPool::remove(Job* job) {
 
 bool ActorPool::run_here_if_idle(Job* job) {
   std::unique_lock lock(mutex_);
-  State& state = states_[job];
-  if (state.queued || state.running || state.removing) {
-    if (!state.queued && !state.running && !state.deadline) states_.erase(job);
-    return false;
+  if (const auto it = states_.find(job); it != states_.end()) {
+    const State& state = it->second;
+    if (state.queued || state.running || state.removing) return false;
   }
-  state.running = true;
+  states_[job].running = true;
   run_step(job, lock);
   return true;
 }

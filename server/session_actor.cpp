@@ -114,32 +114,30 @@ void SessionActor::unsubscribe(std::uint64_t connection) {
 }
 
 void SessionActor::post(std::uint64_t connection, ClientRequest request) {
-  bool step_here = false;
   if (const auto* move = std::get_if<DragMove>(&request.message)) {
-    std::lock_guard lock(mutex_);
-    ++stats_.drag_samples_received;
-    if (stopping_) return;
-    if (mailbox_ && mailbox_->connection != connection) {
-      // another connection's sample is not superseded by this one: keep it in order
-      Item flushed;
-      flushed.kind = Item::Kind::kDrag;
-      flushed.drag = std::move(*mailbox_);
-      queue_.push_back(std::move(flushed));
-      mailbox_.reset();
+    {
+      std::lock_guard lock(mutex_);
+      ++stats_.drag_samples_received;
+      if (stopping_) return;
+      if (mailbox_ && mailbox_->connection != connection) {
+        // another connection's sample is not superseded by this one: keep it in order
+        Item flushed;
+        flushed.kind = Item::Kind::kDrag;
+        flushed.drag = std::move(*mailbox_);
+        queue_.push_back(std::move(flushed));
+        mailbox_.reset();
+      }
+      if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
+      mailbox_->move = *move;
+      if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
+      // while a tick waits for kMinTickInterval, samples gather in the mailbox until it is due
+      if (tick_deferred_) return;
+      const bool cheap = stats_.ticks > 0 && stats_.last_tick_cost <= kInlineTickBudget;
+      if (!queue_.empty() || !cheap || !inline_allowance_left(Clock::now())) {
+        pool_->wake(this);
+        return;
+      }
     }
-    if (!mailbox_) mailbox_ = DragSample{connection, {}, {}};
-    mailbox_->move = *move;
-    if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
-    // while a tick waits for kMinTickInterval, samples gather in the mailbox until it is due
-    if (tick_deferred_) return;
-    step_here = queue_.empty() && last_tick_cost_ && *last_tick_cost_ <= kInlineTickBudget &&
-                inline_allowance_left(Clock::now());
-    if (!step_here) {
-      pool_->wake(this);
-      return;
-    }
-  }
-  if (step_here) {
     // a cheap sample with nothing before it: solving it here saves waking a worker, and the
     // worker waking this thread again for the pose
     const auto started = Clock::now();
@@ -223,13 +221,13 @@ void SessionActor::step() {
     tick_owed_ = false;
   }
   if (pose_dirty_) broadcast_pose();
-  if (t_posting_thread_steps && was_moving_ && !session_->needs_tick()) {
-    // the figure came to rest: a worker records it in the journal (this thread writes no files)
-    std::lock_guard lock(mutex_);
-    if (!stopping_) pool_->wake(this);
-    return;
-  }
   if (was_moving_ && !session_->needs_tick()) {
+    if (t_posting_thread_steps) {
+      // a worker records where the figure came to rest (this thread writes no files)
+      std::lock_guard lock(mutex_);
+      if (!stopping_) pool_->wake(this);
+      return;
+    }
     // the readouts show the state the figure came to rest in, not the last one sent in motion
     if (held_report_) broadcast_text(*std::exchange(held_report_, std::nullopt));
     settle();  // keep where the figure came to rest
@@ -410,8 +408,8 @@ void SessionActor::tick() {
   {
     std::lock_guard lock(mutex_);
     ++stats_.ticks;
-    last_tick_cost_ = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - now);
-    stats_.last_tick_cost = *last_tick_cost_;
+    stats_.last_tick_cost =
+        std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - now);
   }
   if (result.pose_changed) pose_dirty_ = true;
   if (result.committed) after_edit();

@@ -260,8 +260,7 @@ class SessionActor : private ActorPool::Job {
   std::optional<DragSample> mailbox_;
   bool stopping_ = false;
   bool tick_deferred_ = false;  // a sample's tick waits for kMinTickInterval: samples gather
-  std::optional<std::chrono::microseconds> last_tick_cost_;  // wall time of the last tick
-  ActorStats stats_;
+  ActorStats stats_;            // its last_tick_cost decides where post() runs a sample's step
 
   // the actor's steps only
   std::map<std::uint64_t, std::shared_ptr<SessionSubscriber>> subscribers_;
