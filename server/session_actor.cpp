@@ -97,6 +97,11 @@ ActorStats SessionActor::stats() const {
   return out;
 }
 
+void SessionActor::set_inline_tick_budget(std::chrono::microseconds budget) {
+  std::lock_guard lock(mutex_);
+  inline_tick_budget_ = budget;
+}
+
 void SessionActor::subscribe(std::uint64_t connection,
                              std::shared_ptr<SessionSubscriber> subscriber) {
   Item item;
@@ -132,7 +137,7 @@ void SessionActor::post(std::uint64_t connection, ClientRequest request) {
       if (!request.id.is_null()) mailbox_->ack_ids.push_back(std::move(request.id));
       // while a tick waits for kMinTickInterval, samples gather in the mailbox until it is due
       if (tick_deferred_) return;
-      const bool cheap = stats_.ticks > 0 && stats_.last_tick_cost <= kInlineTickBudget;
+      const bool cheap = stats_.ticks > 0 && stats_.last_tick_cost <= inline_tick_budget_;
       if (!queue_.empty() || !cheap || !inline_allowance_left(Clock::now())) {
         pool_->wake(this);
         return;

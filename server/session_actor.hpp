@@ -210,6 +210,8 @@ class SessionActor : private ActorPool::Job {
   }
 
   ActorStats stats() const;
+  /// Replaces kInlineTickBudget for this actor (tests: a budget every tick meets, or none).
+  void set_inline_tick_budget(std::chrono::microseconds budget);
   /// Runs the commands already posted (saving if needed) on the calling thread, then stops: no
   /// step runs afterwards. Idempotent. Must not be called from a step of this actor.
   void stop();
@@ -261,6 +263,7 @@ class SessionActor : private ActorPool::Job {
   bool stopping_ = false;
   bool tick_deferred_ = false;  // a sample's tick waits for kMinTickInterval: samples gather
   ActorStats stats_;            // its last_tick_cost decides where post() runs a sample's step
+  std::chrono::microseconds inline_tick_budget_ = kInlineTickBudget;
 
   // the actor's steps only
   std::map<std::uint64_t, std::shared_ptr<SessionSubscriber>> subscribers_;

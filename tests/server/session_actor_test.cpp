@@ -229,45 +229,49 @@ TEST_F(SessionActorTest, DragSamplesAreCoalescedAndFlushedBeforeALaterCommand) {
 // A drag sample posted to an idle actor whose ticks are cheap is solved by post()'s caller (the
 // server's I/O thread), which saves two thread wake-ups: its ack and its pose have arrived when
 // post() returns. Commands, and samples of a session whose ticks are costly, go to a worker.
+// The budget is set so that every tick is cheap, then none: what a tick costs varies with the
+// build and the machine's load.
 TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsOnAWorker) {
   const server::Position p = hand();
   post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
   ASSERT_TRUE(recorder_->wait_for_answer(1));
   EXPECT_NE(recorder_->answer_thread(1), std::this_thread::get_id());
-  // the first samples make the actor tick, so it knows what a tick costs
   std::uint32_t seq = 0;
-  for (; seq < 3; ++seq) {
-    post({{"type", "drag_move"}, {"seq", seq + 1}, {"target", p}, {"id", 100 + seq}});
-    ASSERT_TRUE(recorder_->wait_for_answer(100 + seq));
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  const auto cost = actor_->stats().last_tick_cost;
-  const bool cheap = cost <= server::SessionActor::kInlineTickBudget;
-  const auto here_before = actor_->stats().steps_on_posting_thread;
-  int answered_here = 0;
-  constexpr int kSamples = 20;
-  for (int i = 0; i < kSamples; ++i, ++seq) {
-    const json id = 100 + seq;
-    post({{"type", "drag_move"},
-          {"seq", seq + 1},
-          {"target", {p[0], p[1] + 0.002 * i, p[2]}},
-          {"id", id}});
-    if (recorder_->answer_thread(id) == std::this_thread::get_id() &&
-        recorder_->last_pose_seq() == seq + 1) {
-      ++answered_here;  // acknowledged, solved and its pose sent before post() returned
+  // posts `samples` drag samples 5 ms apart (past kMinTickInterval); returns how many were
+  // acknowledged, solved and had their pose sent before post() returned
+  const auto samples_answered_here = [&](int samples) {
+    int answered_here = 0;
+    for (int i = 0; i < samples; ++i, ++seq) {
+      const json id = 100 + seq;
+      post({{"type", "drag_move"},
+            {"seq", seq + 1},
+            {"target", {p[0], p[1] + 0.002 * i, p[2]}},
+            {"id", id}});
+      if (recorder_->answer_thread(id) == std::this_thread::get_id() &&
+          recorder_->last_pose_seq() == seq + 1) {
+        ++answered_here;
+      }
+      EXPECT_TRUE(recorder_->wait_for_answer(id));
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
-    ASSERT_TRUE(recorder_->wait_for_answer(id));
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // past kMinTickInterval
-  }
-  const auto here = actor_->stats().steps_on_posting_thread - here_before;
-  if (cheap) {
-    // a worker's periodic tick may hold the actor when a sample arrives: most, not all
-    EXPECT_GE(answered_here, kSamples / 2) << "ticks take " << cost.count() << " us";
-    EXPECT_EQ(here, static_cast<std::uint64_t>(answered_here));
-  } else {
-    EXPECT_EQ(answered_here, 0) << "ticks take " << cost.count() << " us";
-    EXPECT_EQ(here, 0u);
-  }
+    return answered_here;
+  };
+  samples_answered_here(3);  // the first samples make the actor tick: it knows what a tick costs
+
+  actor_->set_inline_tick_budget(std::chrono::seconds(1));
+  auto here_before = actor_->stats().steps_on_posting_thread;
+  constexpr int kSamples = 20;
+  const int cheap_here = samples_answered_here(kSamples);
+  // a worker's periodic tick may hold the actor when a sample arrives: most, not all
+  EXPECT_GE(cheap_here, kSamples / 2);
+  EXPECT_EQ(actor_->stats().steps_on_posting_thread - here_before,
+            static_cast<std::uint64_t>(cheap_here));
+
+  actor_->set_inline_tick_budget(std::chrono::microseconds(0));  // every tick is costlier
+  here_before = actor_->stats().steps_on_posting_thread;
+  EXPECT_EQ(samples_answered_here(5), 0);
+  EXPECT_EQ(actor_->stats().steps_on_posting_thread - here_before, 0u);
+
   post({{"type", "drag_end"}, {"id", 2}});
   ASSERT_TRUE(recorder_->wait_for_answer(2));
   EXPECT_NE(recorder_->answer_thread(2), std::this_thread::get_id());
@@ -277,6 +281,8 @@ TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsO
 // such a tick is solved at once: kMinTickInterval spaces the ticks samples ask for, not these.
 TEST_F(SessionActorTest, ASampleJustAfterAPeriodicTickIsSolvedAtOnce) {
   const server::Position p = hand();
+  // samples are solved on this thread, so a loaded machine's wake-ups do not blur the 2 ms
+  actor_->set_inline_tick_budget(std::chrono::seconds(1));
   post({{"type", "drag_begin"}, {"link", "r_hand"}, {"target", p}, {"id", 1}});
   ASSERT_TRUE(recorder_->wait_for_answer(1));
   std::vector<double> waits_ms;
