@@ -246,6 +246,7 @@ void SessionActor::step() {
   std::lock_guard lock(mutex_);
   if (stopping_) return;
   tick_deferred_ = was_moving_ && tick_owed_;
+  if (tick_deferred_) ++stats_.sample_ticks_deferred;
   pool_->wake_at(this, next_tick);
 }
 

@@ -70,6 +70,7 @@ struct ActorStats {
   std::uint64_t snapshots = 0;
   std::uint64_t pose_frames = 0;
   std::uint64_t steps_on_posting_thread = 0;    // drag samples solved by post()'s caller
+  std::uint64_t sample_ticks_deferred = 0;      // steps whose sample waits for kMinTickInterval
   std::chrono::microseconds last_tick_cost{0};  // wall time of the last solver tick
 };
 
