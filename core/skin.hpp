@@ -11,6 +11,20 @@
 
 namespace core {
 
+/// An image a material is painted with, as its file holds it (PNG or JPEG bytes).
+struct MeshTexture {
+  std::string mime_type;  // "image/png" or "image/jpeg"
+  std::string bytes;
+};
+
+/// A run of triangles drawn with one material.
+struct MeshPart {
+  int first_triangle = 0;
+  int triangle_count = 0;
+  Eigen::Vector4f base_color = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);  // times the texture
+  int texture = -1;  // index into SkinnedMesh::textures, or -1
+};
+
 struct SkinnedMesh {
   std::string name;
   std::vector<Eigen::Vector3f> positions;     // bind pose, world frame of the model
@@ -20,9 +34,24 @@ struct SkinnedMesh {
   std::vector<std::array<float, 4>> weights;  // per vertex, summing to 1
   std::vector<int> bones;                     // link index of each skin joint
   std::vector<Transform> inverse_bind;        // per bone: world → bone frame at bind pose
-  Eigen::Vector4f base_color = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);
+  Eigen::Vector4f base_color = Eigen::Vector4f(0.8f, 0.8f, 0.8f, 1.0f);  // the first part's
+  /// Texture coordinates, empty or one per position: origin at the image's bottom-left corner
+  /// (OpenGL's convention; glTF's v runs the other way).
+  std::vector<Eigen::Vector2f> uvs;
+  /// Consecutive runs covering every triangle in order; empty: one part of base_color.
+  std::vector<MeshPart> parts;
+  std::vector<MeshTexture> textures;
 
   bool empty() const { return positions.empty(); }
 };
+
+/// "image/png" or "image/jpeg" from the first bytes of an image file; empty for anything else.
+std::string image_mime_type(const std::string& bytes);
+
+/// Empty when the mesh's texture coordinates, parts and textures fit it: one finite uv per
+/// vertex (or none); parts that cover every triangle in order, each with a finite colour in
+/// [0, 1] and a texture that exists (or -1); textures that are PNG or JPEG images as their
+/// mime type says. Otherwise the first rule broken, naming the part, texture or vertex.
+std::string check_mesh_materials(const SkinnedMesh& mesh);
 
 }  // namespace core

@@ -4,10 +4,12 @@
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/IOStream.hpp>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
@@ -50,6 +52,34 @@ class FolderIOSystem : public Assimp::DefaultIOSystem {
   fs::path folder_;
 };
 
+// the largest image file a material may name that is read from beside the file
+constexpr std::uintmax_t kMaxImageFile = std::uintmax_t{64} << 20;
+
+// Image files a material names, read from the folder of `path` (and below) only: the name as
+// written, else its last component (a path from the machine the file was made on).
+ImageFileReader image_reader_beside(const std::string& path) {
+  return [folder = fs::weakly_canonical(fs::path(path)).parent_path()](const std::string& name) {
+    FolderIOSystem io(folder);
+    std::string normalized = name;
+    std::replace(normalized.begin(), normalized.end(), '\\', '/');
+    for (const fs::path& candidate :
+         {folder / fs::path(normalized), folder / fs::path(normalized).filename()}) {
+      const std::string file = candidate.string();
+      if (!io.Exists(file.c_str())) continue;
+      Assimp::IOStream* stream = io.Open(file.c_str(), "rb");
+      if (stream == nullptr) continue;
+      std::string bytes;
+      if (stream->FileSize() <= kMaxImageFile) {
+        bytes.resize(stream->FileSize());
+        if (stream->Read(bytes.data(), 1, bytes.size()) != bytes.size()) bytes.clear();
+      }
+      io.Close(stream);
+      if (!bytes.empty()) return bytes;
+    }
+    return std::string();
+  };
+}
+
 }  // namespace
 
 std::string lower_extension(const std::string& path) {
@@ -78,7 +108,8 @@ SkinnedImport convert_scene(const aiScene& scene,
   const std::size_t nl = skeleton.links.size();
   std::vector<int> model_link(nl);  // model link index of each link
   for (std::size_t k = 0; k < nl; ++k) model_link[k] = out.model->link_index(skeleton.link_name[k]);
-  out.mesh = build_mesh(scene, skinned, world, skeleton, model_link, warnings);
+  out.mesh =
+      build_mesh(scene, skinned, world, skeleton, model_link, image_reader_beside(path), warnings);
   for (const AnimInfo& info : motion.anims)
     check_budget(info, options.budget, options.frame_rate, out.model->nq);
   out.clips = build_clips(*out.model, model_link, skeleton, motion, poses, options.frame_rate);

@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -113,19 +115,102 @@ void append_triangles(const aiMesh& mesh, std::size_t base, SkinnedMesh& out) {
   }
 }
 
-// the base (else diffuse) colour of the mesh's material into `out`, clamped to [0, 1]; false
-// when the material has neither
-bool material_color(const aiScene& scene, const aiMesh& mesh, SkinnedMesh& out) {
-  if (mesh.mMaterialIndex >= scene.mNumMaterials) return false;
-  const aiMaterial* mat = scene.mMaterials[mesh.mMaterialIndex];
+// the base (else diffuse) colour of a material, clamped to [0, 1]; nullopt when it has neither
+std::optional<Eigen::Vector4f> material_color(const aiMaterial& mat) {
   aiColor4D c;
-  if (mat->Get(AI_MATKEY_BASE_COLOR, c) != aiReturn_SUCCESS &&
-      mat->Get(AI_MATKEY_COLOR_DIFFUSE, c) != aiReturn_SUCCESS) {
-    return false;
+  if (mat.Get(AI_MATKEY_BASE_COLOR, c) != aiReturn_SUCCESS &&
+      mat.Get(AI_MATKEY_COLOR_DIFFUSE, c) != aiReturn_SUCCESS) {
+    return std::nullopt;
   }
   const Eigen::Vector4f col(c.r, c.g, c.b, c.a);
-  if (col.allFinite()) out.base_color = col.cwiseMax(0.0f).cwiseMin(1.0f);
-  return true;
+  if (!col.allFinite()) return std::nullopt;
+  return col.cwiseMax(0.0f).cwiseMin(1.0f);
+}
+
+// The textures of the materials, each image read once: embedded ones as the file holds them,
+// others from beside the file. An image that is neither PNG nor JPEG, or cannot be found, leaves
+// its material in its base colour (a warning).
+class TextureTable {
+ public:
+  TextureTable(const aiScene& scene,
+               SkinnedMesh& out,
+               const ImageFileReader& read_image_file,
+               Warnings& warnings)
+      : scene_(scene), out_(out), read_image_file_(read_image_file), warnings_(warnings) {}
+
+  // the texture index of the material's base-colour (else diffuse) image, or -1
+  int texture_of(const aiMaterial& mat) {
+    aiString name;
+    if (mat.GetTexture(aiTextureType_BASE_COLOR, 0, &name) != aiReturn_SUCCESS &&
+        mat.GetTexture(aiTextureType_DIFFUSE, 0, &name) != aiReturn_SUCCESS) {
+      return -1;
+    }
+    const std::string key = name.C_Str();
+    if (const auto found = index_.find(key); found != index_.end()) return found->second;
+    const int index = load(key);
+    index_[key] = index;
+    return index;
+  }
+
+ private:
+  int load(const std::string& name) {
+    std::string bytes;
+    if (const aiTexture* embedded = scene_.GetEmbeddedTexture(name.c_str())) {
+      if (embedded->mHeight != 0) {
+        warnings_.add("texture '" + name +
+                      "' is stored as raw texels, which are not read: drawn in its base colour");
+        return -1;
+      }
+      bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
+    } else {
+      bytes = read_image_file_(name);
+      if (bytes.empty()) {
+        warnings_.add("texture '" + name +
+                      "' is not in the file nor beside it: drawn in its base colour");
+        return -1;
+      }
+    }
+    const std::string mime = core::image_mime_type(bytes);
+    if (mime.empty()) {
+      warnings_.add("texture '" + name + "' is not a PNG or JPEG image: drawn in its base colour");
+      return -1;
+    }
+    out_.textures.push_back(core::MeshTexture{mime, std::move(bytes)});
+    return static_cast<int>(out_.textures.size()) - 1;
+  }
+
+  const aiScene& scene_;
+  SkinnedMesh& out_;
+  const ImageFileReader& read_image_file_;
+  Warnings& warnings_;
+  std::map<std::string, int> index_;
+};
+
+// the first set of texture coordinates of one mesh ((0, 0) where it has none)
+void append_uvs(const aiMesh& mesh, SkinnedMesh& out) {
+  const aiVector3D* uv = mesh.mTextureCoords[0];
+  for (std::size_t v = 0; v < mesh.mNumVertices; ++v) {
+    Eigen::Vector2f t(0.0f, 0.0f);
+    if (uv != nullptr) t = Eigen::Vector2f(uv[v].x, uv[v].y);
+    out.uvs.push_back(t.allFinite() ? t : Eigen::Vector2f(0.0f, 0.0f));
+  }
+}
+
+// the part of the triangles from `first` on: its material's colour and texture
+core::MeshPart mesh_part(const aiScene& scene,
+                         const aiMesh& mesh,
+                         std::size_t first,
+                         const SkinnedMesh& out,
+                         TextureTable& textures) {
+  core::MeshPart part;
+  part.first_triangle = static_cast<int>(first);
+  part.triangle_count = static_cast<int>(out.triangles.size() - first);
+  if (mesh.mMaterialIndex < scene.mNumMaterials) {
+    const aiMaterial& mat = *scene.mMaterials[mesh.mMaterialIndex];
+    if (const auto color = material_color(mat)) part.base_color = *color;
+    part.texture = textures.texture_of(mat);
+  }
+  return part;
 }
 
 }  // namespace
@@ -135,11 +220,12 @@ SkinnedMesh build_mesh(const aiScene& scene,
                        const WorldAxes& world,
                        const Skeleton& skeleton,
                        const std::vector<int>& model_link,
+                       const ImageFileReader& read_image_file,
                        Warnings& warnings) {
   SkinnedMesh out;
   BoneTable bones(out, skeleton, model_link);
+  TextureTable textures(scene, out, read_image_file, warnings);
   std::size_t unweighted = 0;
-  bool colored = false;
   for (const SourceMesh& sm : skinned.meshes) {
     const aiMesh* mesh = sm.mesh;
     const std::size_t base = out.positions.size();
@@ -148,10 +234,17 @@ SkinnedMesh build_mesh(const aiScene& scene,
     }
     if (out.name.empty()) out.name = mesh->mName.C_Str();
     append_vertices(*mesh, world.A * sm.B, out);
+    append_uvs(*mesh, out);
     unweighted += append_influences(sm, skeleton, bones, out);
+    const std::size_t first_triangle = out.triangles.size();
     append_triangles(*mesh, base, out);
-    if (!colored) colored = material_color(scene, *mesh, out);
+    out.parts.push_back(mesh_part(scene, *mesh, first_triangle, out, textures));
   }
+  if (!out.parts.empty()) out.base_color = out.parts.front().base_color;
+  // a mesh none of whose parts is textured needs no texture coordinates
+  const bool textured = std::any_of(out.parts.begin(), out.parts.end(),
+                                    [](const core::MeshPart& p) { return p.texture >= 0; });
+  if (!textured) out.uvs.clear();
   if (unweighted > 0) {
     warnings.add(std::to_string(unweighted) +
                  " vertices have no bone weights; they follow the root '" + skeleton.link_name[0] +

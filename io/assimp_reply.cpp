@@ -13,7 +13,7 @@ namespace io::assimp_detail {
 namespace {
 
 // the reply's first bytes: format and version of the child → parent wire format
-constexpr char kReplyMagic[8] = {'P', 'D', 'S', 'K', 'I', 'N', '0', '1'};
+constexpr char kReplyMagic[8] = {'P', 'D', 'S', 'K', 'I', 'N', '0', '2'};
 constexpr std::uint8_t kReplyOk = 0;
 constexpr std::uint8_t kReplyError = 1;
 // longest model JSON, and longest name, message or warning, the parent accepts
@@ -118,6 +118,20 @@ void write_mesh(const SkinnedMesh& mesh, ReplyWriter& w) {
     for (int r = 0; r < 3; ++r) w.f64(X.p[r]);
   }
   for (int c = 0; c < 4; ++c) w.f32(mesh.base_color[c]);
+  w.u32(static_cast<std::uint32_t>(mesh.uvs.size()));
+  for (const auto& uv : mesh.uvs) w.raw(uv.data(), 2 * sizeof(float));
+  w.u32(static_cast<std::uint32_t>(mesh.parts.size()));
+  for (const core::MeshPart& p : mesh.parts) {
+    w.i32(p.first_triangle);
+    w.i32(p.triangle_count);
+    for (int c = 0; c < 4; ++c) w.f32(p.base_color[c]);
+    w.i32(p.texture);
+  }
+  w.u32(static_cast<std::uint32_t>(mesh.textures.size()));
+  for (const core::MeshTexture& t : mesh.textures) {
+    w.str(t.mime_type);
+    w.str(t.bytes);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -196,6 +210,25 @@ void read_mesh(ReplyReader& r, const Model& m, SkinnedMesh& s) {
   check_vertices(s);
   for (int c = 0; c < 4; ++c) s.base_color[c] = r.f32();
   if (!s.base_color.allFinite()) throw std::runtime_error("a non-finite colour");
+  s.uvs.resize(r.count(2 * sizeof(float)));
+  for (auto& uv : s.uvs) {
+    uv.x() = r.f32();  // one statement each: the order of a call's arguments is unspecified
+    uv.y() = r.f32();
+  }
+  s.parts.resize(r.count(4 * 7));
+  for (core::MeshPart& p : s.parts) {
+    p.first_triangle = r.i32();
+    p.triangle_count = r.i32();
+    for (int c = 0; c < 4; ++c) p.base_color[c] = r.f32();
+    p.texture = r.i32();
+  }
+  s.textures.resize(r.count(8));
+  for (core::MeshTexture& t : s.textures) {
+    t.mime_type = r.str(kMaxReplyName);
+    t.bytes = r.str(kMaxReplyString);
+  }
+  const std::string e = core::check_mesh_materials(s);
+  if (!e.empty()) throw std::runtime_error("a bad mesh: " + e);
 }
 
 void read_clips(ReplyReader& r, const Model& m, std::vector<ImportedClip>& clips) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_set>
@@ -195,7 +196,23 @@ void add_mesh(Parts& d,
   d.doc.meshes.push_back(std::move(mesh));
 }
 
-// the skinned mesh with its material (base colour, clamped to [0, 1])
+// the images of the skinned mesh's textures, stored in the buffer, each a texture sampled with
+// glTF's defaults (linear, repeat); returns the texture index of each
+void add_textures(Parts& d, const SkinnedMesh& skin) {
+  for (const core::MeshTexture& t : skin.textures) {
+    tinygltf::Image image;
+    image.bufferView = d.buf.add_view(t.bytes.data(), t.bytes.size(), 0);
+    image.mimeType = t.mime_type;
+    d.doc.images.push_back(std::move(image));
+    tinygltf::Texture texture;
+    texture.source = static_cast<int>(d.doc.images.size()) - 1;
+    d.doc.textures.push_back(std::move(texture));
+  }
+}
+
+// The skinned mesh: one primitive per part (its triangles, a material of its base colour,
+// clamped to [0, 1], and texture), all sharing the vertex attributes; TEXCOORD_0 with glTF's v
+// (from the image's top edge).
 void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
   std::vector<int> skin_joint_of_bone;
   for (int link : skin.bones) skin_joint_of_bone.push_back(link - 1);
@@ -211,12 +228,53 @@ void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
     normalized_influences(skin.joints[v], skin.weights[v], skin_joint_of_bone, &m.jnt[4 * v],
                           &wgt[4 * v]);
   }
-  for (const auto& t : skin.triangles) {
-    m.idx.insert(m.idx.end(), {static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]),
-                               static_cast<std::uint32_t>(t[2])});
+  std::map<std::string, int> attributes;
+  attributes["POSITION"] = d.buf.add_floats(m.pos, 3, TINYGLTF_TYPE_VEC3, true, kArrayBuffer);
+  attributes["NORMAL"] = d.buf.add_floats(m.nrm, 3, TINYGLTF_TYPE_VEC3, false, kArrayBuffer);
+  attributes["JOINTS_0"] = d.buf.add_integers(m.jnt, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                              TINYGLTF_TYPE_VEC4, n, kArrayBuffer);
+  attributes["WEIGHTS_0"] = d.buf.add_floats(wgt, 4, TINYGLTF_TYPE_VEC4, false, kArrayBuffer);
+  if (!skin.uvs.empty()) {
+    std::vector<float> uv;
+    uv.reserve(2 * n);
+    for (const auto& t : skin.uvs) uv.insert(uv.end(), {t.x(), 1.0f - t.y()});
+    attributes["TEXCOORD_0"] = d.buf.add_floats(uv, 2, TINYGLTF_TYPE_VEC2, false, kArrayBuffer);
   }
-  const Eigen::Vector4f c = skin.base_color.cwiseMax(0.0f).cwiseMin(1.0f);
-  add_mesh(d, skin.name.empty() ? "skin" : skin.name, m, wgt, {c[0], c[1], c[2], c[3]}, 0.8);
+  const int first_texture = static_cast<int>(d.doc.textures.size());
+  add_textures(d, skin);
+
+  std::vector<core::MeshPart> parts = skin.parts;
+  if (parts.empty()) {
+    parts.push_back({0, static_cast<int>(skin.triangles.size()), skin.base_color, -1});
+  }
+  tinygltf::Mesh mesh;
+  mesh.name = skin.name.empty() ? "skin" : skin.name;
+  for (size_t k = 0; k < parts.size(); ++k) {
+    const core::MeshPart& part = parts[k];
+    if (part.triangle_count == 0) continue;
+    std::vector<std::uint32_t> idx;
+    idx.reserve(3 * static_cast<size_t>(part.triangle_count));
+    for (int t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
+      for (int c : skin.triangles[t]) idx.push_back(static_cast<std::uint32_t>(c));
+    }
+    tinygltf::Primitive p;
+    p.attributes = attributes;
+    p.indices = d.buf.add_indices(idx, n);
+    p.material = static_cast<int>(d.doc.materials.size());
+    p.mode = TINYGLTF_MODE_TRIANGLES;  // tinygltf always writes the mode, -1 when unset
+    tinygltf::Material mat;
+    mat.name = mesh.name + (parts.size() > 1 ? "_" + std::to_string(k) : std::string());
+    const Eigen::Vector4f c = part.base_color.cwiseMax(0.0f).cwiseMin(1.0f);
+    mat.pbrMetallicRoughness.baseColorFactor = {c[0], c[1], c[2], c[3]};
+    mat.pbrMetallicRoughness.metallicFactor = 0.0;
+    mat.pbrMetallicRoughness.roughnessFactor = 0.8;
+    if (part.texture >= 0 && !skin.uvs.empty()) {
+      mat.pbrMetallicRoughness.baseColorTexture.index = first_texture + part.texture;
+    }
+    d.doc.materials.push_back(std::move(mat));
+    mesh.primitives.push_back(std::move(p));
+  }
+  d.doc.meshes.push_back(std::move(mesh));
 }
 
 // the stick figure: a box from each link to each child, a cube on each link origin

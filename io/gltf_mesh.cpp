@@ -76,6 +76,8 @@ void check_skin(const Model& model, const SkinnedMesh& skin) {
       }
     }
   }
+  const std::string materials = core::check_mesh_materials(skin);
+  if (!materials.empty()) fail(materials);
 }
 
 std::vector<Eigen::Vector3f> unit_normals(const SkinnedMesh& skin) {

@@ -17,7 +17,8 @@ bool is_rotation(const Matrix3& R);
 
 /// Checks that `skin` fits `model`: one normal (or none), joint and weight entry per vertex;
 /// bones that are distinct links with finite rigid inverse binds; finite positions and normals;
-/// non-negative weights with a positive sum on bones of the mesh; triangles on its vertices.
+/// non-negative weights with a positive sum on bones of the mesh; triangles on its vertices;
+/// texture coordinates, parts and textures as core::check_mesh_materials says.
 /// @throws std::invalid_argument "glTF export: skinned mesh: ..." naming the vertex, bone or
 ///         triangle
 void check_skin(const Model& model, const SkinnedMesh& skin);

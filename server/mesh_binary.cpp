@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <vector>
@@ -41,6 +42,18 @@ std::string encode_mesh_binary(const core::SkinnedMesh& mesh) {
     }
     inverse_bind.push_back(std::move(m));
   }
+  nlohmann::json parts = nlohmann::json::array();
+  for (const core::MeshPart& p : mesh.parts) {
+    parts.push_back(
+        {{"first", p.first_triangle},
+         {"count", p.triangle_count},
+         {"base_color", {p.base_color[0], p.base_color[1], p.base_color[2], p.base_color[3]}},
+         {"texture", p.texture}});
+  }
+  nlohmann::json textures = nlohmann::json::array();
+  for (const core::MeshTexture& t : mesh.textures) {
+    textures.push_back({{"mime_type", t.mime_type}, {"bytes", t.bytes.size()}});
+  }
   const nlohmann::json header{
       {"name", mesh.name},
       {"vertices", n},
@@ -49,7 +62,10 @@ std::string encode_mesh_binary(const core::SkinnedMesh& mesh) {
       {"bones", bones},
       {"inverse_bind", inverse_bind},
       {"base_color",
-       {mesh.base_color[0], mesh.base_color[1], mesh.base_color[2], mesh.base_color[3]}}};
+       {mesh.base_color[0], mesh.base_color[1], mesh.base_color[2], mesh.base_color[3]}},
+      {"uvs", !mesh.uvs.empty()},
+      {"parts", parts},
+      {"textures", textures}};
   std::string text = header.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   text.resize((text.size() + 3) / 4 * 4, ' ');
 
@@ -81,6 +97,10 @@ std::string encode_mesh_binary(const core::SkinnedMesh& mesh) {
   floats.clear();
   for (const auto& w : mesh.weights) floats.insert(floats.end(), w.begin(), w.end());
   append(out, floats.data(), floats.size());
+  floats.clear();
+  for (const auto& uv : mesh.uvs) floats.insert(floats.end(), {uv.x(), uv.y()});
+  append(out, floats.data(), floats.size());
+  for (const core::MeshTexture& t : mesh.textures) append(out, t.bytes.data(), t.bytes.size());
   return out;
 }
 
@@ -108,6 +128,7 @@ class Reader {
     at_ = std::min(bytes_.size(), at_ + (size + 3) / 4 * 4);
     return out;
   }
+  std::size_t bytes_left() const { return bytes_.size() - at_; }
 
  private:
   const std::string& bytes_;
@@ -120,6 +141,71 @@ void check_finite(const std::vector<T>& values, const std::string& source, const
   for (T v : values) {
     if (!std::isfinite(v)) refuse(source, std::string(field) + ": a value is not finite");
   }
+}
+
+// a number the header gives as an unsigned integer that fits an int
+int small_count(const nlohmann::json& j, const std::string& source, const std::string& field) {
+  if (!j.is_number_unsigned() || j.get<std::uint64_t>() > std::numeric_limits<int>::max()) {
+    refuse(source, field + ": not a count (rule: an integer from 0 to 2^31 - 1)");
+  }
+  return j.get<int>();
+}
+
+// Texture coordinates, parts and textures (absent in meshes written before them: one part of
+// base_color, untextured).
+void read_materials(const nlohmann::json& h,
+                    Reader& in,
+                    const std::string& source,
+                    core::SkinnedMesh& mesh) {
+  const std::size_t n = mesh.positions.size();
+  if (h.contains("uvs") && !h["uvs"].is_boolean()) refuse(source, "uvs: not a bool");
+  for (const char* field : {"parts", "textures"}) {
+    if (h.contains(field) && !h[field].is_array()) {
+      refuse(source, std::string(field) + ": not an array");
+    }
+  }
+  if (h.value("parts", nlohmann::json::array()).size() > mesh.triangles.size() ||
+      h.value("textures", nlohmann::json::array()).size() > in.bytes_left()) {
+    refuse(source, "parts, textures: more than the mesh can hold");
+  }
+  for (const auto& p : h.value("parts", nlohmann::json::array())) {
+    const std::string at = "parts[" + std::to_string(mesh.parts.size()) + "]";
+    if (!p.is_object() || !p.contains("first") || !p.contains("count")) {
+      refuse(source, at + ": not an object with first and count");
+    }
+    core::MeshPart part;
+    part.first_triangle = small_count(p["first"], source, at + ".first");
+    part.triangle_count = small_count(p["count"], source, at + ".count");
+    const nlohmann::json color = p.value("base_color", nlohmann::json());
+    if (!color.is_array() || color.size() != 4) refuse(source, at + ".base_color: not 4 numbers");
+    for (int k = 0; k < 4; ++k) {
+      if (!color[k].is_number()) refuse(source, at + ".base_color: not 4 numbers");
+      part.base_color[k] = color[k].get<float>();
+    }
+    const nlohmann::json texture = p.value("texture", nlohmann::json(-1));
+    if (!texture.is_number_integer() || texture.get<long long>() < -1 ||
+        texture.get<long long>() > std::numeric_limits<int>::max()) {
+      refuse(source, at + ".texture: not a texture index or -1");
+    }
+    part.texture = texture.get<int>();
+    mesh.parts.push_back(part);
+  }
+  if (h.value("uvs", false)) {
+    const std::vector<float> uvs = in.take<float>(2 * n, "uvs");
+    check_finite(uvs, source, "uvs");
+    for (std::size_t v = 0; v < n; ++v) mesh.uvs.emplace_back(uvs[2 * v], uvs[2 * v + 1]);
+  }
+  for (const auto& t : h.value("textures", nlohmann::json::array())) {
+    const std::string at = "textures[" + std::to_string(mesh.textures.size()) + "]";
+    if (!t.is_object() || !t.contains("mime_type") || !t["mime_type"].is_string() ||
+        !t.contains("bytes") || !t["bytes"].is_number_unsigned()) {
+      refuse(source, at + ": not an object with mime_type and bytes");
+    }
+    const std::vector<char> image = in.take<char>(t["bytes"].get<std::size_t>(), "textures");
+    mesh.textures.push_back({t["mime_type"].get<std::string>(), {image.begin(), image.end()}});
+  }
+  const std::string e = core::check_mesh_materials(mesh);
+  if (!e.empty()) refuse(source, e);
 }
 
 }  // namespace
@@ -218,6 +304,7 @@ core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
     mesh.joints.push_back(j);
     mesh.weights.push_back(w);
   }
+  read_materials(h, in, source, mesh);
   return mesh;
 }
 

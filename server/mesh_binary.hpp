@@ -6,9 +6,14 @@
 //   indices    uint32 × 3 per triangle
 //   joints     uint16 × 4 per vertex (indices into the header's "bones"), padded to 4 bytes
 //   weights    float32 × 4 per vertex
+//   uvs        float32 × 2 per vertex (absent unless the header says "uvs": true; origin at the
+//              image's bottom-left corner)
+//   textures   each texture's image file (PNG or JPEG), in the header's order
 // The header: {"name", "vertices", "triangles", "normals": bool, "bones": [link index of each skin
 // joint in the snapshot's character.links], "inverse_bind": [[16 numbers, column-major] per
-// bone], "base_color": [r, g, b, a]}.
+// bone], "base_color": [r, g, b, a], "uvs": bool, "parts": [{"first", "count" (triangles),
+// "base_color", "texture": index or -1}], "textures": [{"mime_type", "bytes"}]}. Without "parts"
+// the mesh is one part of "base_color" (meshes saved before parts existed read so).
 #pragma once
 
 #include <string>

@@ -546,6 +546,75 @@ TEST(AssimpImport, ExportOfEachImportIsValidAndReproducesItsClip) {
   if (!why.empty()) std::printf("  validator and three.js checks skipped: %s\n", why.c_str());
 }
 
+// CesiumMan's skin texture comes with its mesh (one part, textured, a uv per vertex), survives
+// our export and import unchanged, and is read from beside a .gltf that names it as a file, but
+// never from outside the file's folder.
+TEST(AssimpImport, TexturesComeWithTheMeshAndSurviveOurExport) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  const io::SkinnedImport& s = imported("CesiumMan.glb");
+  const core::SkinnedMesh& mesh = s.mesh;
+  ASSERT_EQ(mesh.textures.size(), 1u);
+  const core::MeshTexture& texture = mesh.textures[0];
+  EXPECT_EQ(core::image_mime_type(texture.bytes), texture.mime_type);
+  EXPECT_GT(texture.bytes.size(), 1000u);
+  ASSERT_EQ(mesh.uvs.size(), mesh.positions.size());
+  ASSERT_FALSE(mesh.parts.empty());
+  EXPECT_EQ(mesh.parts[0].texture, 0);
+  EXPECT_EQ(core::check_mesh_materials(mesh), "");
+  // the coordinates spread over the image, not one texel
+  Eigen::Vector2f lo = mesh.uvs[0], hi = mesh.uvs[0];
+  for (const auto& uv : mesh.uvs) lo = lo.cwiseMin(uv), hi = hi.cwiseMax(uv);
+  EXPECT_GT((hi - lo).minCoeff(), 0.3f)
+      << "uv range " << lo.transpose() << " .. " << hi.transpose();
+
+  const auto expect_same_materials = [&](const core::SkinnedMesh& back, const std::string& how) {
+    ASSERT_EQ(back.textures.size(), 1u) << how;
+    EXPECT_EQ(back.textures[0].bytes, texture.bytes) << how;
+    ASSERT_EQ(back.uvs.size(), mesh.uvs.size()) << how;
+    float worst = 0;
+    for (std::size_t v = 0; v < mesh.uvs.size(); ++v) {
+      worst = std::max(worst, (back.uvs[v] - mesh.uvs[v]).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LE(worst, 1e-6f) << how;  // v is stored as 1 - v: one rounding
+    ASSERT_EQ(back.parts.size(), mesh.parts.size()) << how;
+    for (std::size_t k = 0; k < mesh.parts.size(); ++k) {
+      EXPECT_EQ(back.parts[k].triangle_count, mesh.parts[k].triangle_count) << how;
+      EXPECT_EQ(back.parts[k].texture, mesh.parts[k].texture) << how;
+      EXPECT_LE((back.parts[k].base_color - mesh.parts[k].base_color).cwiseAbs().maxCoeff(), 1e-6f)
+          << how;
+    }
+  };
+  gltf_test::TempDir dir;
+  const core::Clip& clip = s.clips[0].clip;
+  io::save_gltf_file(dir.path("cesium.glb"), *s.model, &clip, &mesh, {});
+  expect_same_materials(io::import_skinned_file(dir.path("cesium.glb")).mesh, "our .glb");
+
+  // the same .gltf with its image in a file beside it, then in a file outside its folder
+  io::save_gltf_file(dir.path("cesium.gltf"), *s.model, &clip, &mesh, {});
+  std::ifstream in(dir.path("cesium.gltf"));
+  Json doc = Json::parse(in);
+  ASSERT_EQ(doc["images"].size(), 1u);
+  std::filesystem::create_directory(dir.path("model"));
+  gltf_test::write_bytes(dir.path("model/skin.image"), texture.bytes);
+  gltf_test::write_bytes(dir.path("outside.image"), texture.bytes);
+  for (const char* uri : {"skin.image", "../outside.image"}) {
+    doc["images"][0] = Json{{"uri", uri}};
+    gltf_test::write_bytes(dir.path("model/named.gltf"), doc.dump());
+    const io::SkinnedImport back = io::import_skinned_file(dir.path("model/named.gltf"));
+    if (std::string(uri) == "skin.image") {
+      expect_same_materials(back.mesh, "a .gltf naming the image beside it");
+      continue;
+    }
+    EXPECT_TRUE(back.mesh.textures.empty()) << "an image outside the file's folder was read";
+    EXPECT_EQ(back.mesh.parts.at(0).texture, -1);
+    bool warned = false;
+    for (const std::string& w : back.warnings)
+      warned |= w.find("outside.image") != std::string::npos;
+    EXPECT_TRUE(warned) << "no warning names the texture left out";
+  }
+  expect_no_children();
+}
+
 // Expects the import of `path` with `options` to fail with a message holding `expected`.
 void expect_import_error_with(const std::string& path,
                               const io::ImportOptions& options,

@@ -115,6 +115,29 @@ void expect_same_mesh(const core::SkinnedMesh& a, const core::SkinnedMesh& b) {
     EXPECT_EQ(a.inverse_bind[k].p, b.inverse_bind[k].p);
   }
   EXPECT_EQ(a.base_color, b.base_color);
+  EXPECT_EQ(a.uvs, b.uvs);
+  ASSERT_EQ(a.parts.size(), b.parts.size());
+  for (std::size_t k = 0; k < a.parts.size(); ++k) {
+    EXPECT_EQ(a.parts[k].first_triangle, b.parts[k].first_triangle);
+    EXPECT_EQ(a.parts[k].triangle_count, b.parts[k].triangle_count);
+    EXPECT_EQ(a.parts[k].base_color, b.parts[k].base_color);
+    EXPECT_EQ(a.parts[k].texture, b.parts[k].texture);
+  }
+  ASSERT_EQ(a.textures.size(), b.textures.size());
+  for (std::size_t k = 0; k < a.textures.size(); ++k) {
+    EXPECT_EQ(a.textures[k].mime_type, b.textures[k].mime_type);
+    EXPECT_EQ(a.textures[k].bytes, b.textures[k].bytes);
+  }
+}
+
+// small_mesh in two parts, the second painted with a (tiny, not decodable) PNG
+core::SkinnedMesh textured_mesh() {
+  core::SkinnedMesh m = small_mesh();
+  m.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  m.textures.push_back({"image/png", std::string("\x89PNG\r\n\x1a\n", 8) + "rest"});
+  m.parts = {{0, 1, Eigen::Vector4f(0.2f, 0.4f, 0.6f, 1.0f), -1},
+             {1, 1, Eigen::Vector4f(1.0f, 1.0f, 1.0f, 0.5f), 0}};
+  return m;
 }
 
 TEST_F(SessionRegistryTest, ASkinnedSessionComesBackWithItsMeshAndABrokenMeshFileLosesOnlyIt) {
@@ -155,6 +178,53 @@ TEST_F(SessionRegistryTest, ASkinnedSessionComesBackWithItsMeshAndABrokenMeshFil
   found.actor.reset();
   ASSERT_EQ(r->remove(id, token), 200);
   EXPECT_FALSE(fs::exists(dir_ / "sessions" / (id + ".mesh")));
+}
+
+TEST(MeshBinary, TexturesPartsAndUvsRoundTripAndAreChecked) {
+  const core::SkinnedMesh mesh = textured_mesh();
+  ASSERT_EQ(core::check_mesh_materials(mesh), "");
+  const std::string bytes = server::encode_mesh_binary(mesh);
+  expect_same_mesh(server::decode_mesh_binary(bytes, 5, "m.mesh"), mesh);
+  // a mesh written before parts existed still reads: one part of its base colour
+  expect_same_mesh(server::decode_mesh_binary(server::encode_mesh_binary(small_mesh()), 5, "m"),
+                   small_mesh());
+
+  const auto broken = [](auto change) {
+    core::SkinnedMesh m = textured_mesh();
+    change(m);
+    return m;
+  };
+  const auto rule_of = [](const core::SkinnedMesh& m) { return core::check_mesh_materials(m); };
+  EXPECT_NE(rule_of(broken([](auto& m) { m.uvs.pop_back(); })).find("3 texture coordinates"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) { m.textures[0].bytes = "GIF89a"; })).find("texture 0"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) {
+              m.textures[0].mime_type = "image/jpeg";
+            })).find("declared 'image/jpeg' but holds image/png"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) { m.parts[1].first_triangle = 0; })).find("part 1"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) { m.parts.pop_back(); })).find("cover 1 of 2"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) { m.parts[1].texture = 1; })).find("texture 1 does not"),
+            std::string::npos);
+  EXPECT_NE(rule_of(broken([](auto& m) { m.parts[0].base_color[0] = 2; })).find("base colour"),
+            std::string::npos);
+
+  // the file's bytes are checked the same way, naming the file
+  const auto refused = [&](const std::string& b, const std::string& fragment) {
+    try {
+      server::decode_mesh_binary(b, 5, "m.mesh");
+      ADD_FAILURE() << "accepted; expected " << fragment;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("m.mesh: " + fragment), std::string::npos) << e.what();
+    }
+  };
+  refused(bytes.substr(0, bytes.size() - 4), "textures");
+  refused(server::encode_mesh_binary(broken([](auto& m) { m.textures[0].bytes[1] = 'X'; })),
+          "texture 0");
+  refused(server::encode_mesh_binary(broken([](auto& m) { m.parts[1].texture = 3; })), "part 1");
 }
 
 TEST(MeshBinary, RoundTripsAndRefusesWhatDoesNotFitNamingTheField) {

@@ -1,8 +1,8 @@
 // A skinned character in the page with `pindrag serve` in headless Chromium: CesiumMan (glTF) is
-// drawn as its mesh (three.js SkinnedMesh fed by GET /api/sessions/{id}/mesh): where its vertices
-// project, the pixels change when the mesh is switched off for the capsules; dragging a link with
-// the mouse carries the vertices bound to it rigidly (linear blend skinning with weight 1); a
-// reloaded page gets the mesh again.
+// drawn as its mesh with its texture (three.js SkinnedMesh fed by GET /api/sessions/{id}/mesh):
+// where its vertices project, the pixels change when the mesh is switched off for the capsules;
+// dragging a link with the mouse carries the vertices bound to it rigidly (linear blend skinning
+// with weight 1); a reloaded page gets the mesh again.
 // Usage: node tests/web/skinned_mesh_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
 
 import { test, before } from 'node:test';
@@ -59,8 +59,10 @@ const setView = (page, key, value) =>
 test('CesiumMan is drawn as its skinned mesh, and a dragged link carries its vertices', { skip: noData }, async () => {
   const { page, context, problems } = await openOnFile(CESIUM);
   const info = await page.evaluate(() => window.pindrag.mesh());
-  console.log(`mesh: ${info.vertices} vertices, visible ${info.visible}`);
+  console.log(`mesh: ${info.vertices} vertices, visible ${info.visible}, ${info.parts} parts, ${info.textured} textured`);
   assert.equal(info.visible, true);
+  // the skin's texture came with the mesh and was decoded (CesiumMan has one, on its one part)
+  assert.equal(info.textured, info.parts, 'every part of CesiumMan is drawn with its texture');
   await page.screenshot({ path: path.join(out, 'cesium-mesh.png') });
 
   // pixels where the mesh's vertices project change when the capsules stand in for it

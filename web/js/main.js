@@ -189,10 +189,12 @@ async function main() {
     contextLost: () => viewport.renderer.getContext().isContextLost(),
     /** The fitted trial's markers drawn now (markers_view.js): frame, counts, residuals in metres. */
     markers: () => markers.stats(),
-    /** The skinned mesh drawn now: {vertices, visible} (null: none). */
+    /** The skinned mesh drawn now: {vertices, visible, parts, textured (parts drawn with an image)} (null: none). */
     mesh() {
       const m = skinned.object();
-      return m ? { vertices: m.geometry.attributes.position.count, visible: m.visible } : null;
+      if (!m) return null;
+      const textured = m.material.filter((material) => material.map && material.map.image).length;
+      return { vertices: m.geometry.attributes.position.count, visible: m.visible, parts: m.material.length, textured };
     },
     /** World position of skinned vertex i as drawn now (linear blend skinning by three.js). */
     skinnedVertex(i) {

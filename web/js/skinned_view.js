@@ -3,11 +3,12 @@
 // linear blend skinning gives what the server's exports give. The mesh comes once per session
 // (GET /api/sessions/{id}/mesh, binary, kept by the browser's cache; server/mesh_binary.hpp). With
 // the mesh shown the capsules stay as pick targets but are not drawn; the "mesh" view option
-// brings the capsules back, and a character without a mesh keeps them.
+// brings the capsules back, and a character without a mesh keeps them. Each part of the mesh has
+// its own material: its base colour times its texture (PNG or JPEG from the same download).
 
 import * as THREE from 'three';
 
-/** Decodes the binary mesh: {header, positions, normals, indices, joints, weights}. */
+/** Decodes the binary mesh: {header, positions, normals, indices, joints, weights, uvs, images}. */
 export function decodeMesh(buffer) {
   const magic = new TextDecoder().decode(new Uint8Array(buffer, 0, 4));
   if (magic !== 'PDMS') throw new Error('mesh: not a pindrag mesh (magic)');
@@ -25,8 +26,27 @@ export function decodeMesh(buffer) {
   const indices = take(Uint32Array, 3 * header.triangles);
   const joints = take(Uint16Array, 4 * n);
   const weights = take(Float32Array, 4 * n);
+  const uvs = header.uvs ? take(Float32Array, 2 * n) : null;
+  const images = (header.textures || []).map((t) => ({ mimeType: t.mime_type, bytes: take(Uint8Array, t.bytes) }));
   if (at > buffer.byteLength) throw new Error('mesh: shorter than its header says');
-  return { header, positions, normals, indices, joints, weights };
+  return { header, positions, normals, indices, joints, weights, uvs, images };
+}
+
+/** A three.js texture of an image file's bytes, once the browser has decoded it. */
+async function textureOf({ mimeType, bytes }) {
+  const url = URL.createObjectURL(new Blob([bytes], { type: mimeType }));
+  try {
+    const image = new Image();
+    image.src = url;
+    await image.decode();
+    const texture = new THREE.Texture(image);
+    texture.colorSpace = THREE.SRGBColorSpace; // glTF's base colour textures are sRGB
+    texture.wrapS = texture.wrapT = THREE.RepeatWrapping;
+    texture.needsUpdate = true;
+    return texture;
+  } finally {
+    URL.revokeObjectURL(url);
+  }
 }
 
 export function createSkinnedView(state, viewport, skeleton, api) {
@@ -39,12 +59,45 @@ export function createSkinnedView(state, viewport, skeleton, api) {
     viewport.scene.remove(mesh.object);
     for (const { bone } of mesh.bones) viewport.scene.remove(bone);
     mesh.object.geometry.dispose();
-    mesh.object.material.dispose();
+    for (const material of mesh.object.material) {
+      if (material.map) material.map.dispose();
+      material.dispose();
+    }
     mesh.object.skeleton.dispose();
     mesh = null;
   }
 
-  function build(decoded) {
+  // one material per part (the whole mesh in the header's base colour when it has no parts);
+  // a texture the browser cannot decode leaves its part in its base colour
+  async function materialsOf(decoded) {
+    const { header } = decoded;
+    const parts = header.parts && header.parts.length ? header.parts : [{ first: 0, count: header.triangles, base_color: header.base_color, texture: -1 }];
+    const textures = await Promise.all(
+      decoded.images.map((image, k) =>
+        textureOf(image).catch(() => {
+          signals.notify.dispatch({ text: `mesh: texture ${k} (${image.mimeType}) could not be decoded: drawn in its base colour`, kind: 'error' });
+          return null;
+        }),
+      ),
+    );
+    return parts.map((part) => {
+      const [r, g, b, a] = part.base_color;
+      return {
+        part,
+        material: new THREE.MeshStandardMaterial({
+          color: new THREE.Color(r, g, b),
+          map: decoded.uvs && part.texture >= 0 ? textures[part.texture] : null,
+          roughness: 0.7,
+          metalness: 0.0,
+          transparent: a < 1,
+          opacity: a,
+          side: THREE.DoubleSide,
+        }),
+      };
+    });
+  }
+
+  function build(decoded, materials) {
     const { header } = decoded;
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(decoded.positions, 3));
@@ -52,6 +105,8 @@ export function createSkinnedView(state, viewport, skeleton, api) {
     geometry.setIndex(new THREE.BufferAttribute(decoded.indices, 1));
     geometry.setAttribute('skinIndex', new THREE.Uint16BufferAttribute(decoded.joints, 4));
     geometry.setAttribute('skinWeight', new THREE.BufferAttribute(decoded.weights, 4));
+    if (decoded.uvs) geometry.setAttribute('uv', new THREE.BufferAttribute(decoded.uvs, 2));
+    materials.forEach(({ part }, k) => geometry.addGroup(3 * part.first, 3 * part.count, k));
     if (!decoded.normals) geometry.computeVertexNormals();
     // bones live in the scene, not in a hierarchy: each one's world matrix is its link's pose
     const bones = header.bones.map((link) => {
@@ -64,16 +119,10 @@ export function createSkinnedView(state, viewport, skeleton, api) {
       bones.map((b) => b.bone),
       inverses,
     );
-    const [r, g, b, a] = header.base_color;
-    const material = new THREE.MeshStandardMaterial({
-      color: new THREE.Color(r, g, b),
-      roughness: 0.7,
-      metalness: 0.0,
-      transparent: a < 1,
-      opacity: a,
-      side: THREE.DoubleSide,
-    });
-    const object = new THREE.SkinnedMesh(geometry, material);
+    const object = new THREE.SkinnedMesh(
+      geometry,
+      materials.map((m) => m.material),
+    );
     object.name = 'skinned-mesh';
     object.frustumCulled = false; // the bind-pose bounds say nothing about the posed figure
     object.castShadow = true;
@@ -109,9 +158,17 @@ export function createSkinnedView(state, viewport, skeleton, api) {
   async function load(generation) {
     try {
       const decoded = decodeMesh(await api.mesh());
-      if (generation !== loading) return; // another character arrived meanwhile
+      const materials = await materialsOf(decoded);
+      if (generation !== loading) {
+        // another character arrived meanwhile
+        for (const { material } of materials) {
+          if (material.map) material.map.dispose();
+          material.dispose();
+        }
+        return;
+      }
       clear();
-      build(decoded);
+      build(decoded, materials);
       state.meshVertices = decoded.header.vertices;
     } catch (err) {
       signals.notify.dispatch({ text: `${err.message}: the character is drawn as capsules`, kind: 'error' });
