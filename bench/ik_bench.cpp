@@ -79,6 +79,7 @@ void BM_IkStep(benchmark::State& state) {
   }
   state.counters["lower_rows"] = rows;
   state.counters["top_rows"] = solver.report().top_rows;
+  state.counters["range_rows"] = solver.report().range_rows;  // active-set rows for joint ranges
 }
 
 // The same step done the plain way: stack the rows, form the N×N null-space projector, and
