@@ -251,7 +251,9 @@ void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
   mesh.name = skin.name.empty() ? "skin" : skin.name;
   for (size_t k = 0; k < parts.size(); ++k) {
     const core::MeshPart& part = parts[k];
-    if (part.triangle_count == 0) continue;
+    // a part without triangles draws nothing, but a mesh keeps one primitive (glTF needs one)
+    const bool last_chance = k + 1 == parts.size() && mesh.primitives.empty();
+    if (part.triangle_count == 0 && !last_chance) continue;
     std::vector<std::uint32_t> idx;
     idx.reserve(3 * static_cast<size_t>(part.triangle_count));
     for (int t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
@@ -259,9 +261,10 @@ void add_skinned_mesh(Parts& d, const SkinnedMesh& skin) {
     }
     tinygltf::Primitive p;
     p.attributes = attributes;
-    p.indices = d.buf.add_indices(idx, n);
+    if (!idx.empty()) p.indices = d.buf.add_indices(idx, n);
     p.material = static_cast<int>(d.doc.materials.size());
-    p.mode = TINYGLTF_MODE_TRIANGLES;  // tinygltf always writes the mode, -1 when unset
+    // tinygltf always writes the mode, -1 when unset; a mesh without triangles is its points
+    p.mode = idx.empty() ? TINYGLTF_MODE_POINTS : TINYGLTF_MODE_TRIANGLES;
     tinygltf::Material mat;
     mat.name = mesh.name + (parts.size() > 1 ? "_" + std::to_string(k) : std::string());
     const Eigen::Vector4f c = part.base_color.cwiseMax(0.0f).cwiseMin(1.0f);

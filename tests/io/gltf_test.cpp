@@ -415,6 +415,68 @@ TEST(GltfExport, SkinnedMeshAttributesAreValidAndSkinLikeOurModel) {
   std::printf("  skinned vertices, file vs our skinning: max distance %.3g m\n", worst);
 }
 
+// Each part of a mesh is a primitive with its own material; a textured part's image is stored in
+// the buffer as given and sampled with TEXCOORD_0 in glTF's convention (v from the top); a bad
+// part is refused naming it; a mesh without triangles is written as its points.
+TEST(GltfExport, PartsArePrimitivesWithTheirMaterialsAndTextures) {
+  const auto m = human();
+  core::SkinnedMesh skin = synthetic_skin(*m);
+  const int nt = static_cast<int>(skin.triangles.size());
+  for (std::size_t v = 0; v < skin.positions.size(); ++v) {
+    skin.uvs.emplace_back(0.001f * static_cast<float>(v % 1000), 0.25f);
+  }
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + "not a real image";
+  skin.textures.push_back({"image/png", png});
+  skin.parts = {{0, 10, Eigen::Vector4f(0.1f, 0.2f, 0.3f, 1.0f), -1},
+                {10, nt - 10, Eigen::Vector4f(1.0f, 1.0f, 1.0f, 1.0f), 0}};
+  std::vector<std::string> errors;
+  const gltf_test::Document doc = gltf_test::parse_glb(io::write_glb(*m, nullptr, &skin), errors);
+  for (const auto& e : errors) ADD_FAILURE() << e;
+  gltf_test::check_layout(doc, errors);
+  const Json& j = doc.json;
+  const Json& prims = j["meshes"][0]["primitives"];
+  ASSERT_EQ(prims.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(gltf_test::read_accessor(doc, prims[k]["indices"]).size(),
+              3u * static_cast<std::size_t>(skin.parts[k].triangle_count));
+    const Json& pbr = j["materials"][prims[k]["material"].get<int>()]["pbrMetallicRoughness"];
+    // glTF's default factor (1, 1, 1, 1) may be left out
+    const Json factor = pbr.value("baseColorFactor", Json::array({1.0, 1.0, 1.0, 1.0}));
+    EXPECT_NEAR(factor[2].get<double>(), skin.parts[k].base_color[2], 1e-6);
+    EXPECT_EQ(pbr.contains("baseColorTexture"), k == 1);
+  }
+  const Json& pbr1 = j["materials"][prims[1]["material"].get<int>()]["pbrMetallicRoughness"];
+  const Json& image =
+      j["images"][j["textures"][pbr1["baseColorTexture"]["index"].get<int>()]["source"].get<int>()];
+  EXPECT_EQ(image["mimeType"], "image/png");
+  const Json& view = j["bufferViews"][image["bufferView"].get<int>()];
+  const std::size_t at = view.value("byteOffset", 0);
+  EXPECT_EQ(std::string(doc.bin.begin() + at, doc.bin.begin() + at + view["byteLength"].get<int>()),
+            png);
+  const auto uv = gltf_test::read_accessor(doc, prims[0]["attributes"]["TEXCOORD_0"]);
+  ASSERT_EQ(uv.size(), 2 * skin.uvs.size());
+  EXPECT_NEAR(uv[2 * 7], skin.uvs[7].x(), 1e-7);
+  EXPECT_NEAR(uv[2 * 7 + 1], 0.75, 1e-7);  // 1 − v
+
+  core::SkinnedMesh bad = skin;
+  bad.parts[1].texture = 4;
+  try {
+    io::write_glb(*m, nullptr, &bad);
+    ADD_FAILURE() << "a part naming a texture that does not exist was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("part 1: texture 4 does not exist"), std::string::npos)
+        << e.what();
+  }
+
+  core::SkinnedMesh points = synthetic_skin(*m);
+  points.triangles.clear();
+  const gltf_test::Document dots =
+      gltf_test::parse_glb(io::write_glb(*m, nullptr, &points), errors);
+  ASSERT_EQ(dots.json["meshes"][0]["primitives"].size(), 1u);
+  EXPECT_EQ(dots.json["meshes"][0]["primitives"][0]["mode"], 0);  // POINTS
+  EXPECT_FALSE(dots.json["meshes"][0]["primitives"][0].contains("indices"));
+}
+
 TEST(GltfExport, StickFigureBoxesAreRigidlySkinnedToTheirLinks) {
   const auto m = human();
   io::GltfExportOptions o;
