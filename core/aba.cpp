@@ -1,6 +1,6 @@
 #include "core/aba.hpp"
 
-#include <Eigen/LU>
+#include <cmath>
 
 #include "core/hinge.hpp"
 #include "core/kinematics.hpp"
@@ -18,6 +18,19 @@ Eigen::Matrix<double, 6, NV> subspace_matrix(const Model& model, int i) {
   return S;
 }
 
+// Ia_parent += [A B; Bᵀ D], entry by entry: Eigen's strided block += on a 6 x 6 was an
+// out-of-line loop and a visible share of the profile
+void add_blocks(const Matrix3& A, const Matrix3& B, const Matrix3& D, Matrix6& Ia_parent) {
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      Ia_parent(r, c) += A(r, c);
+      Ia_parent(r, c + 3) += B(r, c);
+      Ia_parent(r + 3, c) += B(c, r);
+      Ia_parent(r + 3, c + 3) += D(r, c);
+    }
+  }
+}
+
 // The articulated inertia of a child, given in the child frame C, as seen in its parent P:
 // Ia_P = X_CPᵀ Ia_C X_CP with X_CP the motion transform P → C (RBDA eq. 2.66, Table 7.1 line
 // "IA_λ += ..."). In 3 x 3 blocks Ia = [A B; Bᵀ D] and with X_PC = (R, p), P = [p×], the rotated
@@ -30,10 +43,7 @@ Eigen::Matrix<double, 6, NV> subspace_matrix(const Model& model, int i) {
 void add_shifted(
     const Vector3& p, const Matrix3& A, const Matrix3& B, const Matrix3& D, Matrix6& Ia_parent) {
   if (p.x() == 0 && p.y() == 0 && p.z() == 0) {
-    Ia_parent.topLeftCorner<3, 3>() += A;
-    Ia_parent.topRightCorner<3, 3>() += B;
-    Ia_parent.bottomLeftCorner<3, 3>() += B.transpose();
-    Ia_parent.bottomRightCorner<3, 3>() += D;
+    add_blocks(A, B, D, Ia_parent);
     return;
   }
   // products with P = [p×] as cross products: (P X).col(j) = p × X.col(j) and, as Pᵀ = −P,
@@ -45,11 +55,7 @@ void add_shifted(
   }
   Matrix3 PDP;
   for (int j = 0; j < 3; ++j) PDP.row(j) = -p.cross(PD.row(j).transpose()).transpose();
-  const Matrix3 B_parent = B + PD;
-  Ia_parent.topLeftCorner<3, 3>() += A - BP - BP.transpose() - PDP;
-  Ia_parent.topRightCorner<3, 3>() += B_parent;
-  Ia_parent.bottomLeftCorner<3, 3>() += B_parent.transpose();
-  Ia_parent.bottomRightCorner<3, 3>() += D;
+  add_blocks(A - BP - BP.transpose() - PDP, B + PD, D, Ia_parent);
 }
 
 // the whole transform for any joint: rotate the blocks with the full R, then shift
@@ -90,7 +96,8 @@ Matrix3 congruence_symmetric(const AxisRotation<K>& r, const Matrix3& M) {
 
 // pass 2 for a hinge (S = [e_K; 0]): U = IA S is column K of IA, D its entry K, u = τ − pA_K;
 // then Ia = IA − U Uᵀ / D and pa = pA + Ia c + U u / D go to the parent through the hinge
-// transform, whose rotation is applied to the 3 x 3 blocks directly (RBDA Table 7.1)
+// transform, whose rotation is applied to the 3 x 3 blocks directly (RBDA Table 7.1). Ia is
+// symmetric, so only its three distinct blocks [A B; Bᵀ D] are formed (27 entries, not 36).
 template <int K>
 void articulate_hinge(Data& data, int i, int parent, double tau_i) {
   const Matrix6& IA = data.IA[i];
@@ -101,26 +108,70 @@ void articulate_hinge(Data& data, int i, int parent, double tau_i) {
   data.Dinv[i](0, 0) = Dinv;
   data.u[i][0] = u;
   if (parent == 0) return;  // nothing above the root needs Ia or pa
-  Matrix6 Ia;
-  for (int c = 0; c < 6; ++c) {
-    const double w = Dinv * U[c];
-    for (int r = 0; r < 6; ++r) Ia(r, c) = IA(r, c) - U[r] * w;
+  const Vector6 w = Dinv * U;
+  Matrix3 A, B, D;
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      A(r, c) = IA(r, c) - U[r] * w[c];
+      B(r, c) = IA(r, c + 3) - U[r] * w[c + 3];
+      D(r, c) = IA(r + 3, c + 3) - U[r + 3] * w[c + 3];
+    }
   }
+  // pa = pA + U u / D + Ia c with Ia c = [A c_ω + B c_v; Bᵀ c_ω + D c_v]
   const Motion& cm = data.c[i];
-  const Force& pA = data.pA[i];
-  const double cv[6] = {cm.angular[0], cm.angular[1], cm.angular[2],
-                        cm.linear[0],  cm.linear[1],  cm.linear[2]};
   const double g = Dinv * u;
-  double pa[6] = {pA.angular[0] + U[0] * g, pA.angular[1] + U[1] * g, pA.angular[2] + U[2] * g,
-                  pA.linear[0] + U[3] * g,  pA.linear[1] + U[4] * g,  pA.linear[2] + U[5] * g};
-  for (int c = 0; c < 6; ++c) {
-    for (int r = 0; r < 6; ++r) pa[r] += Ia(r, c) * cv[c];
+  Vector3 pa_angular = data.pA[i].angular + U.head<3>() * g;
+  Vector3 pa_linear = data.pA[i].linear + U.tail<3>() * g;
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      pa_angular[r] += A(r, c) * cm.angular[c] + B(r, c) * cm.linear[c];
+      pa_linear[r] += B(c, r) * cm.angular[c] + D(r, c) * cm.linear[c];
+    }
   }
   const HingeTransform<K> X = HingeTransform<K>::of(data.X_P[i]);
-  add_shifted(X.p, congruence_symmetric(X.r, Ia.topLeftCorner<3, 3>()),
-              congruence(X.r, Ia.topRightCorner<3, 3>()),
-              congruence_symmetric(X.r, Ia.bottomRightCorner<3, 3>()), data.IA[parent]);
-  data.pA[parent] += X.act(Force{Vector3(pa[0], pa[1], pa[2]), Vector3(pa[3], pa[4], pa[5])});
+  add_shifted(X.p, congruence_symmetric(X.r, A), congruence(X.r, B), congruence_symmetric(X.r, D),
+              data.IA[parent]);
+  data.pA[parent] += X.act(Force{pa_angular, pa_linear});
+}
+
+// The inverse of a symmetric positive-definite N x N matrix (N = 3 or 6: a joint's D = Sᵀ IA S)
+// through its Cholesky factor D = L Lᵀ, unrolled at compile time: D⁻¹ = L⁻ᵀ L⁻¹. Eigen's general
+// LU inverse of the 6 x 6 of a free root was a visible share of the profile.
+template <int N>
+Eigen::Matrix<double, N, N> spd_inverse(const Eigen::Matrix<double, N, N>& D) {
+  double L[N][N] = {};
+  double inv_diag[N];
+  for (int j = 0; j < N; ++j) {
+    double d = D(j, j);
+    for (int k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    L[j][j] = std::sqrt(d);
+    inv_diag[j] = 1.0 / L[j][j];
+    for (int i = j + 1; i < N; ++i) {
+      double s = D(i, j);
+      for (int k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+      L[i][j] = s * inv_diag[j];
+    }
+  }
+  // M = L⁻¹, lower triangular, column by column by forward substitution
+  double M[N][N] = {};
+  for (int j = 0; j < N; ++j) {
+    M[j][j] = inv_diag[j];
+    for (int i = j + 1; i < N; ++i) {
+      double s = 0.0;
+      for (int k = j; k < i; ++k) s += L[i][k] * M[k][j];
+      M[i][j] = -s * inv_diag[i];
+    }
+  }
+  // D⁻¹ = Mᵀ M: entry (r, c) sums over the rows k ≥ max(r, c) where both columns are nonzero
+  Eigen::Matrix<double, N, N> out;
+  for (int c = 0; c < N; ++c) {
+    for (int r = c; r < N; ++r) {
+      double s = 0.0;
+      for (int k = r; k < N; ++k) s += M[k][r] * M[k][c];
+      out(r, c) = out(c, r) = s;
+    }
+  }
+  return out;
 }
 
 // pass 2 for one joint with NV coordinates: U = IA S, D⁻¹ = (Sᵀ U)⁻¹, u = τ − Sᵀ pA, then the
@@ -131,7 +182,7 @@ void articulate(
   const Eigen::Matrix<double, 6, NV> S = subspace_matrix<NV>(model, i);
   const Eigen::Matrix<double, 6, NV> U = data.IA[i] * S;
   const Eigen::Matrix<double, NV, NV> D = S.transpose() * U;
-  const Eigen::Matrix<double, NV, NV> Dinv = D.inverse();  // D is SPD and at most 6 x 6
+  const Eigen::Matrix<double, NV, NV> Dinv = spd_inverse<NV>(D);  // D is SPD (IA is)
   const Eigen::Matrix<double, NV, 1> u = tau.segment<NV>(model.idx_v[i]) - S.transpose() * pa;
   data.U[i].leftCols<NV>() = U;
   data.Dinv[i].topLeftCorner<NV, NV>() = Dinv;
@@ -211,7 +262,7 @@ const Eigen::VectorXd& aba_impl(const Model& model,
       data.IA[i].setZero();
       data.pA[i] = Force::Zero();
     } else {
-      data.IA[i] = I.matrix();
+      I.write_matrix(data.IA[i]);
       data.pA[i] = cross(data.v[i], inertia_times(I, data.v[i]));
     }
     if (f_ext) data.pA[i] -= (*f_ext)[i];

@@ -52,16 +52,6 @@ SpatialInertia SpatialInertia::transformed(const Transform& X_AB) const {
   return out;
 }
 
-Matrix6 SpatialInertia::matrix() const {
-  Matrix6 M;
-  const Matrix3 H = skew(h);
-  M.topLeftCorner<3, 3>() = I_O;
-  M.topRightCorner<3, 3>() = H;
-  M.bottomLeftCorner<3, 3>() = -H;
-  M.bottomRightCorner<3, 3>() = mass * Matrix3::Identity();
-  return M;
-}
-
 Matrix3 exp3(const Vector3& w) {
   const double theta2 = w.squaredNorm();
   const Matrix3 W = skew(w);

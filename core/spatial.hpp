@@ -158,7 +158,28 @@ struct SpatialInertia {
   }
   /// This inertia (given in frame B) expressed in frame A, X = X_AB.
   SpatialInertia transformed(const Transform& X_AB) const;
-  Matrix6 matrix() const;
+  /// The 6 x 6 matrix [I_O  h×; −h×  m 1] (RBDA eq. 2.63 in the additive form).
+  Matrix6 matrix() const {
+    Matrix6 M;
+    write_matrix(M);
+    return M;
+  }
+  /// The same matrix written into M in place, entry by entry (no 6 x 6 temporary to move).
+  void write_matrix(Matrix6& M) const {
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) {
+        M(r, c) = I_O(r, c);
+        M(r + 3, c + 3) = r == c ? mass : 0.0;
+      }
+    }
+    // h× = [0 −h_z h_y; h_z 0 −h_x; −h_y h_x 0] in the top right, its negative (= transpose) below
+    M(0, 3) = 0.0, M(0, 4) = -h.z(), M(0, 5) = h.y();
+    M(1, 3) = h.z(), M(1, 4) = 0.0, M(1, 5) = -h.x();
+    M(2, 3) = -h.y(), M(2, 4) = h.x(), M(2, 5) = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) M(r + 3, c) = -M(r, c + 3);
+    }
+  }
 
   bool operator==(const SpatialInertia& o) const {
     return mass == o.mass && h == o.h && I_O == o.I_O;
