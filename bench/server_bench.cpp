@@ -139,6 +139,19 @@ void stage_run(server::Server& srv, double seconds) {
   row("actor (I/O -> pool worker -> I/O)", actor);
   row("drag_move -> pose (solve, pose)", drag);
   row("solve, as the server's reports time it", solve);
+  // which path the drag samples took (SessionActor::post): solved on the I/O thread that read
+  // them, or handed to a pool worker; and how many waited for kMinTickInterval
+  const auto actor_ref = srv.registry().find(s.id, s.token).actor;
+  if (actor_ref) {
+    const server::ActorStats st = actor_ref->stats();
+    std::printf(
+        "  drag samples: %llu received, %llu solved on the I/O thread, %llu ticks deferred; "
+        "last tick %lld us\n",
+        static_cast<unsigned long long>(st.drag_samples_received),
+        static_cast<unsigned long long>(st.steps_on_posting_thread),
+        static_cast<unsigned long long>(st.sample_ticks_deferred),
+        static_cast<long long>(st.last_tick_cost.count()));
+  }
 }
 
 // A client that subscribes and then reads nothing for `stall` seconds while another client drags

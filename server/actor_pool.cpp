@@ -54,8 +54,11 @@ void ActorPool::wake_at(Job* job, std::optional<Clock::time_point> when) {
     }
     state.deadline = when;
     deadlines_.emplace(*when, job);
+    // a worker already sleeping until an earlier time sees this deadline when it wakes: waking
+    // one now would put a thread on a core for nothing, on every step of a moving session
+    if (!awaited_.empty() && *awaited_.begin() <= *when) return;
   }
-  ready_or_due_.notify_one();  // a sleeping worker may have to wake earlier now
+  ready_or_due_.notify_one();  // no worker waits for a time this early: wake one
 }
 
 void ActorPool::remove(Job* job) {
@@ -141,6 +144,9 @@ void ActorPool::work() {
       State& state = states_.at(job);
       state.queued = false;
       state.running = true;
+      // while this worker runs the step, another one must watch the deadlines: wake one when no
+      // worker is in a timed wait (wake_at skips waking anyone while one is)
+      if (!deadlines_.empty() && awaited_.empty()) ready_or_due_.notify_one();
       run_step(job, lock);
       continue;
     }
@@ -150,7 +156,9 @@ void ActorPool::work() {
     } else {
       // a copy: the set's node may be erased while this worker waits
       const Clock::time_point due = deadlines_.begin()->first;
+      const auto awaiting = awaited_.insert(due);
       ready_or_due_.wait_until(lock, due);
+      awaited_.erase(awaiting);
     }
   }
 }

@@ -82,6 +82,8 @@ class ActorPool {
   std::map<Job*, State> states_;
   std::deque<Job*> ready_;
   std::set<std::pair<Clock::time_point, Job*>> deadlines_;
+  // the times the sleeping workers wait until (one entry per worker in a timed wait)
+  std::multiset<Clock::time_point> awaited_;
   bool stopping_ = false;
   std::vector<std::thread> workers_;
 };

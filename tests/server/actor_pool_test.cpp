@@ -119,6 +119,40 @@ TEST(ActorPool, ADeadlineRunsTheJobThenAndANewDeadlineReplacesTheOld) {
   EXPECT_EQ(pool.jobs(), 0u);
 }
 
+// wake_at wakes no worker when one already sleeps until an earlier time. That worker may then be
+// woken for a long step instead: another one must take over the deadlines, or they wait for the
+// step. The steps below make the worker that watches the deadlines the one a wake picks when
+// sleeping workers are woken in the order they slept (glibc's do so; it is not specified, so the
+// test passes either way when the pool is right).
+TEST(ActorPool, DeadlinesFireOnTimeWhileTheWorkerThatWatchedThemRunsALongStep) {
+  for (int round = 0; round < 3; ++round) {
+    ActorPool pool(2);
+    CountingJob watched, quick, later, blocking;
+    std::atomic<bool> release{false};
+    blocking.on_step = [&] {
+      while (!release) std::this_thread::sleep_for(1ms);
+    };
+    const auto start = ActorPool::Clock::now();
+    std::this_thread::sleep_for(5ms);       // both workers sleep without a deadline
+    pool.wake_at(&watched, start + 200ms);  // one of them now sleeps until then
+    std::this_thread::sleep_for(5ms);
+    pool.wake_at(&watched, std::nullopt);  // it still does, with no deadline left
+    pool.wake(&quick);                     // the other runs a step, sleeps again
+    ASSERT_TRUE(eventually([&] { return quick.steps.load() == 1; }));
+    std::this_thread::sleep_for(5ms);
+    pool.wake_at(&later, start + 300ms);  // after 200 ms: nobody is woken for it
+    pool.wake(&blocking);                 // the first sleeper is taken for this
+    const bool fired = eventually([&] { return later.steps.load() == 1; });
+    const bool still_blocked = blocking.steps.load() == 0;
+    release = true;
+    ASSERT_TRUE(fired) << "round " << round << ": the deadline waited for the long step";
+    EXPECT_TRUE(still_blocked) << "round " << round;
+    EXPECT_GE(ActorPool::Clock::now() - start, 300ms);
+    ASSERT_TRUE(eventually([&] { return blocking.steps.load() == 1; }));
+    EXPECT_EQ(watched.steps.load(), 0);
+  }
+}
+
 TEST(ActorPool, RemoveWaitsForTheStepInProgressAndTheJobNeverRunsAgain) {
   ActorPool pool(2);
   CountingJob job(50ms);
