@@ -147,6 +147,8 @@ class SessionActor : private ActorPool::Job {
   /// Callers of call_within() that may wait at once; more are refused at once, so one busy
   /// session holds at most this many HTTP threads.
   static constexpr int kMaxWaitingCallers = 4;
+  /// Callers inside call_within() now, waiting or about to be refused.
+  int waiting_callers() const { return waiting_callers_.load(); }
 
   /// call() for callers that must not wait long (HTTP handlers): returns `f`'s result if it
   /// completes within `timeout`. A call still queued when the timeout passes is withdrawn and

@@ -432,24 +432,31 @@ TEST_F(SessionActorTest, CallWithinGivesUpOnABusyActorAndAWithdrawnCallNeverRuns
 TEST_F(SessionActorTest, CallWithinRefusesAtOnceWhenEnoughCallersWaitAlready) {
   const auto release = block_actor();
   std::vector<std::thread> waiting;
-  std::atomic<int> busy{0};
+  std::atomic<int> busy{0}, served{0};
   for (int i = 0; i < server::SessionActor::kMaxWaitingCallers; ++i) {
     waiting.emplace_back([&] {
       try {
-        actor_->call_within(std::chrono::milliseconds(500), [](animator::Session&) {});
+        actor_->call_within(std::chrono::seconds(60), [](animator::Session&) {});
+        ++served;
       } catch (const server::ActorBusy&) {
         ++busy;
       }
     });
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // every waiting caller is inside call_within (however slowly a loaded machine started them)
+  ASSERT_TRUE(eventually(
+      [&] { return actor_->waiting_callers() == server::SessionActor::kMaxWaitingCallers; }));
   const auto t0 = std::chrono::steady_clock::now();
   EXPECT_THROW(actor_->call_within(std::chrono::seconds(5), [](animator::Session&) {}),
                server::ActorBusy);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.05);
-  for (auto& t : waiting) t.join();
-  EXPECT_EQ(busy.load(), server::SessionActor::kMaxWaitingCallers);
+  // refused at once, not after its 5 s timeout
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+  EXPECT_EQ(actor_->waiting_callers(), server::SessionActor::kMaxWaitingCallers);
   release();
+  for (auto& t : waiting) t.join();
+  EXPECT_EQ(busy.load(), 0);  // the refused call took no waiting caller's place
+  EXPECT_EQ(served.load(), server::SessionActor::kMaxWaitingCallers);
+  EXPECT_EQ(actor_->waiting_callers(), 0);
   actor_->call_within(std::chrono::seconds(5), [](animator::Session&) {});
 }
 
