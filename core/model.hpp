@@ -86,6 +86,9 @@ struct RangeInnerBounds {
   double swing_radius = -1;  // negative: no inner disk (the nominal direction is not inside)
   double twist_lower = 0;
   double twist_upper = -1;
+  /// sin(θ/2) for the largest angle θ such that every rotation by at most θ is inside (a rotation
+  /// by θ swings the nominal direction and twists about it by at most θ each); negative: none
+  double rotation_sin_half = -1;
   bool operator==(const RangeInnerBounds&) const = default;
 };
 

@@ -176,7 +176,21 @@ RangeInnerBounds inner_bounds(const SphericalRange& range) {
   }
   // shrink a hair so rounding at the rim never accepts a point the full test would refuse
   b.swing_radius = std::isfinite(r) ? r * (1.0 - 1e-9) : -1;
+  // a rotation by θ: its swing angle φ ≤ θ (the angle between x and R x) and its twist
+  // |γ| = 2 atan2(|v_x|, |w|) ≤ 2 atan2(|v|, |w|) = θ; so sin(θ/2) ≤ the swing radius and θ within
+  // the twist interval every vertex allows (a range frame is a change of basis: θ is the same)
+  const double twist_reach = std::min(b.twist_upper, -b.twist_lower);
+  if (b.swing_radius >= 0 && twist_reach >= 0) {
+    const double twist_sin_half = twist_reach >= kPi ? 1.0 : std::sin(0.5 * twist_reach);
+    b.rotation_sin_half = std::min(b.swing_radius, twist_sin_half * (1.0 - 1e-9));
+  }
   return b;
+}
+
+bool joint_rotation_surely_inside(const Model& model, int i, const Quaternion& q_joint) {
+  const double s = model.range_inner[i].rotation_sin_half;
+  // |v|² ≤ s² |q|²: sin²(θ/2) ≤ s², without normalizing q
+  return s >= 0 && q_joint.vec().squaredNorm() <= s * s * q_joint.squaredNorm();
 }
 
 RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st) {

@@ -50,6 +50,10 @@ RangeInnerBounds inner_bounds(const SphericalRange& range);
 /// check_range for spherical joint i of a model, answering from the inner bounds when they
 /// suffice (the common case of a joint well inside its range).
 RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st);
+/// True when spherical joint i's rotation q_joint is inside its range by the inner bounds alone,
+/// without the swing–twist factorization (RangeInnerBounds::rotation_sin_half); false means
+/// "not known": check_joint_range decides.
+bool joint_rotation_surely_inside(const Model& model, int i, const Quaternion& q_joint);
 
 /// A cone of half-angle swing_max around the nominal direction with a constant twist interval,
 /// authored as a triangle fan of `segments` triangles.

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <numbers>
+#include <random>
+#include <string>
+#include <vector>
 
 #include "core/configuration.hpp"
 #include "tests/fixtures/fixtures.hpp"
@@ -146,6 +149,57 @@ TEST(SwingTwist, JointRangeFrameMapsTheNominalDirection) {
   const SwingTwist s =
       joint_swing_twist(*m, 2, Quaternion(Eigen::AngleAxisd(0.4, Vector3::UnitX())));
   EXPECT_NEAR(std::hypot(s.a_y, s.a_z), std::sin(0.2), 1e-14);
+}
+
+// The quick test answers "inside" only for rotations the full test accepts, and it does answer
+// for rotations well inside: a rotation by θ swings and twists by at most θ each.
+TEST(SwingTwist, QuickInsideTestNeverAcceptsWhatTheFullTestRefuses) {
+  ModelBuilder b;
+  b.add_link(fixtures::box_link("root", "", 1, Vector3::Ones()));
+  const std::vector<SphericalRange> ranges = {
+      cone_range(kPi / 4, -0.5, 0.5),  // twist the narrower bound
+      cone_range(kPi / 8, -1.0, 1.2),  // swing the narrower bound
+      directional_range({0, kPi / 2, kPi, 1.5 * kPi}, {0.9, 0.4, 0.6, 0.3},
+                        {-0.4, -0.2, -0.3, -0.1}, {0.3, 0.5, 0.2, 0.4}, -0.3, 0.3),
+      cone_range(kPi / 4, 0.1, 0.6),  // the standard orientation is outside: no quick answer
+  };
+  for (size_t k = 0; k < ranges.size(); ++k) {
+    LinkSpec l = fixtures::box_link("l" + std::to_string(k), "root", 1, Vector3::Ones());
+    l.joint.type = JointType::kSpherical;
+    l.joint.range = ranges[k];
+    l.joint.range.frame = Quaternion(Eigen::AngleAxisd(0.3 * k, Vector3(1, 2, 3).normalized()));
+    b.add_link(l);
+  }
+  const auto m = b.finalize();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int j = 2; j < m->njoints; ++j) {
+    int quick = 0, small_refused = 0;
+    for (int n = 0; n < 20000; ++n) {
+      const double angle = 0.8 * std::abs(unit(rng));
+      const Vector3 axis = Vector3(unit(rng), unit(rng), unit(rng)).normalized();
+      // unnormalized and of either sign: the test must not depend on either
+      const Quaternion q(Eigen::AngleAxisd(angle, axis));
+      const double scale = (n % 2 ? -1.0 : 1.0) * (0.5 + std::abs(unit(rng)));
+      const Quaternion r(scale * q.w(), scale * q.x(), scale * q.y(), scale * q.z());
+      if (!joint_rotation_surely_inside(*m, j, r)) continue;
+      ++quick;
+      const RangeStatus full = check_joint_range(*m, j, joint_swing_twist(*m, j, r.normalized()));
+      if (!full.inside) ++small_refused;
+    }
+    EXPECT_EQ(small_refused, 0) << "joint " << j;
+    if (j < m->njoints - 1) {
+      EXPECT_GT(quick, 1000) << "joint " << j << ": rotations well inside get a quick answer";
+    } else {
+      EXPECT_EQ(quick, 0) << "a range without the standard orientation has no quick answer";
+    }
+  }
+  // the bound itself: 0.5 rad of twist is the first range's narrower limit
+  const double just_inside = 0.5 * (1 - 1e-6), just_beyond = 0.5 * (1 + 1e-6);
+  EXPECT_TRUE(joint_rotation_surely_inside(
+      *m, 2, Quaternion(Eigen::AngleAxisd(just_inside, Vector3(1, 0, 0)))));
+  EXPECT_FALSE(joint_rotation_surely_inside(
+      *m, 2, Quaternion(Eigen::AngleAxisd(just_beyond, Vector3(1, 0, 0)))));
 }
 
 }  // namespace
