@@ -730,8 +730,7 @@ RetargetResult retarget(const core::Model& S,
           break;
         case core::JointType::kSpherical: {
           const Quaternion r = core::quaternion_at(q_ref, iq);
-          if (T.spherical_range[j].empty() ||
-              core::check_joint_range(T, j, core::joint_swing_twist(T, j, r)).inside) {
+          if (T.spherical_range[j].empty() || core::joint_range_status(T, j, r).inside) {
             core::set_quaternion_at(q_start, iq, r);
           }
           break;

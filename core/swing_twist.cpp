@@ -193,6 +193,11 @@ bool joint_rotation_surely_inside(const Model& model, int i, const Quaternion& q
   return s >= 0 && q_joint.vec().squaredNorm() <= s * s * q_joint.squaredNorm();
 }
 
+RangeStatus joint_range_status(const Model& model, int i, const Quaternion& q_joint) {
+  if (joint_rotation_surely_inside(model, i, q_joint)) return RangeStatus{};
+  return check_joint_range(model, i, joint_swing_twist(model, i, q_joint));
+}
+
 RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st) {
   const RangeInnerBounds& b = model.range_inner[i];
   if (!st.singular && st.a_y * st.a_y + st.a_z * st.a_z <= b.swing_radius * b.swing_radius &&

@@ -54,6 +54,9 @@ RangeStatus check_joint_range(const Model& model, int i, const SwingTwist& st);
 /// without the swing–twist factorization (RangeInnerBounds::rotation_sin_half); false means
 /// "not known": check_joint_range decides.
 bool joint_rotation_surely_inside(const Model& model, int i, const Quaternion& q_joint);
+/// The range test of spherical joint i for its joint rotation q_joint: the quick test above
+/// first, then the swing–twist factorization and check_joint_range when it cannot tell.
+RangeStatus joint_range_status(const Model& model, int i, const Quaternion& q_joint);
 
 /// A cone of half-angle swing_max around the nominal direction with a constant twist interval,
 /// authored as a triangle fan of `segments` triangles.

@@ -17,8 +17,7 @@ bool has_spherical_range(const core::Model& model, int i) {
 }
 
 bool spherical_in_range(const core::Model& model, int i, const core::Quaternion& r) {
-  if (core::joint_rotation_surely_inside(model, i, r)) return true;  // no factorization needed
-  return core::check_joint_range(model, i, core::joint_swing_twist(model, i, r)).inside;
+  return core::joint_range_status(model, i, r).inside;
 }
 }  // namespace
 
@@ -98,11 +97,8 @@ double max_range_violation(const core::Model& model, const Eigen::VectorXd& q) {
       const core::JointLimits& L = model.limits[i];
       worst = std::max({worst, q[iq] - L.upper, L.lower - q[iq]});
     } else if (has_spherical_range(model, i)) {
-      const core::Quaternion r = core::quaternion_at(q, iq);
-      if (core::joint_rotation_surely_inside(model, i, r)) continue;
-      const core::RangeStatus s =
-          core::check_joint_range(model, i, core::joint_swing_twist(model, i, r));
-      worst = std::max(worst, s.violation);
+      worst =
+          std::max(worst, core::joint_range_status(model, i, core::quaternion_at(q, iq)).violation);
     }
   }
   return worst;

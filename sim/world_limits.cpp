@@ -42,7 +42,7 @@ void collect_rows(const core::Model& m,
       const core::Quaternion r = core::quaternion_at(q, iq);
       const core::Quaternion next = r * core::quaternion_exp(h * v.segment<3>(iv));
       auto inside = [&](const core::Quaternion& x) {
-        return core::check_joint_range(m, i, core::joint_swing_twist(m, i, x)).inside;
+        return core::joint_range_status(m, i, x).inside;
       };
       if (!inside(next) && inside(r)) {
         for (int d = 0; d < 3; ++d) rows.push_back({iv + d, 0.0, 0, -1, 0.0});
