@@ -11,7 +11,7 @@ namespace animator {
 namespace {
 // weight of the rows that pull every joint back onto the clip: far below the pins (1), so a pin
 // stays within a millimetre when the drag makes them disagree
-constexpr double kReferenceWeight = 1e-4;
+constexpr double kClipReferenceWeight = 1e-4;
 }  // namespace
 
 ik::SolverSettings motion_edit_settings(double frame_time) {
@@ -79,7 +79,7 @@ const Eigen::VectorXd& MotionEditor::edit(const core::Clip& base,
         t != core::JointType::kSpherical) {
       continue;
     }
-    ik::JointReferenceTask r{.joint = j, .weight = kReferenceWeight};
+    ik::JointReferenceTask r{.joint = j, .weight = kClipReferenceWeight};
     const int iq = model_.idx_q[j];
     if (t == core::JointType::kSpherical) {
       r.R_ref = core::quaternion_at(q_ref_, iq);

@@ -38,7 +38,7 @@ constexpr double kMinBoneLength = 1e-4;
 constexpr double kMinSecondBoneSine = 0.25;
 // the retargeted joint values pull with this weight beside the pins (1): far below, so the pins
 // hold where the two disagree (as in editing in motion)
-constexpr double kReferenceWeight = 1e-3;
+constexpr double kSourcePoseWeight = 1e-3;
 // a frame is solved again (up to kMaxRounds times) while a pin is further than this off (m)
 constexpr double kPinTolerance = 5e-4;
 constexpr int kMaxRounds = 20;
@@ -681,10 +681,10 @@ RetargetResult retarget(const core::Model& S,
                              .target_W = dt.X_W[1].p,
                              .target_R_W = Quaternion(dt.X_W[1].R),
                              .mode = ik::TaskMode::kPose,
-                             .weight = kReferenceWeight});
+                             .weight = kSourcePoseWeight});
     ik::add_joint_references(T, q_ref, problem);
     for (ik::Problem::Entry& e : problem.entries()) {
-      if (auto* r = std::get_if<ik::JointReferenceTask>(&e.task)) r->weight = kReferenceWeight;
+      if (auto* r = std::get_if<ik::JointReferenceTask>(&e.task)) r->weight = kSourcePoseWeight;
     }
     for (int t : effectors) {
       const bool contact = is_foot[t] && in_hold(f, t);

@@ -50,26 +50,33 @@ std::string error_plot(const nlohmann::json& report) {
     if (!f.at("flagged").get<bool>()) top = std::max(top, f.at("rms").get<double>() * 1000);
   }
   top = std::ceil(top / 5) * 5;
-  constexpr double kW = 720, kH = 250, kLeft = 50, kBottom = 30, kTop = 20, kRight = 24;
+  constexpr double kChartWidth = 720, kChartHeight = 250, kMarginLeft = 50, kMarginBottom = 30,
+                   kMarginTop = 20, kMarginRight = 24;
   const double duration = std::max(dt * std::max(n - 1, 1), 1e-9);
-  const auto x_of = [&](int f) { return kLeft + (kW - kLeft - kRight) * (f * dt) / duration; };
-  const auto y_of = [&](double mm) { return kH - kBottom - (kH - kBottom - kTop) * mm / top; };
-  std::string svg = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fixed(kW, 0) +
-                    "' height='" + fixed(kH, 0) + "' font-family='sans-serif' font-size='11'>";
+  const auto x_of = [&](int f) {
+    return kMarginLeft + (kChartWidth - kMarginLeft - kMarginRight) * (f * dt) / duration;
+  };
+  const auto y_of = [&](double mm) {
+    return kChartHeight - kMarginBottom - (kChartHeight - kMarginBottom - kMarginTop) * mm / top;
+  };
+  std::string svg = "<svg xmlns='http://www.w3.org/2000/svg' width='" + fixed(kChartWidth, 0) +
+                    "' height='" + fixed(kChartHeight, 0) +
+                    "' font-family='sans-serif' font-size='11'>";
   // axes and ticks
-  svg += "<line x1='" + fixed(kLeft, 1) + "' y1='" + fixed(y_of(0), 1) + "' x2='" +
-         fixed(kW - kRight, 1) + "' y2='" + fixed(y_of(0), 1) + "' stroke='#444'/>";
-  svg += "<line x1='" + fixed(kLeft, 1) + "' y1='" + fixed(kTop, 1) + "' x2='" + fixed(kLeft, 1) +
-         "' y2='" + fixed(y_of(0), 1) + "' stroke='#444'/>";
+  svg += "<line x1='" + fixed(kMarginLeft, 1) + "' y1='" + fixed(y_of(0), 1) + "' x2='" +
+         fixed(kChartWidth - kMarginRight, 1) + "' y2='" + fixed(y_of(0), 1) + "' stroke='#444'/>";
+  svg += "<line x1='" + fixed(kMarginLeft, 1) + "' y1='" + fixed(kMarginTop, 1) + "' x2='" +
+         fixed(kMarginLeft, 1) + "' y2='" + fixed(y_of(0), 1) + "' stroke='#444'/>";
   for (int k = 0; k <= 4; ++k) {
     const double mm = top * k / 4;
-    svg += "<text x='" + fixed(kLeft - 6, 1) + "' y='" + fixed(y_of(mm) + 4, 1) +
+    svg += "<text x='" + fixed(kMarginLeft - 6, 1) + "' y='" + fixed(y_of(mm) + 4, 1) +
            "' text-anchor='end'>" + fixed(mm, mm < 10 ? 1 : 0) + "</text>";
     const double t = duration * k / 4;
-    svg += "<text x='" + fixed(kLeft + (kW - kLeft - kRight) * k / 4, 1) + "' y='" +
-           fixed(kH - 12, 1) + "' text-anchor='middle'>" + fixed(t, 1) + " s</text>";
+    svg += "<text x='" +
+           fixed(kMarginLeft + (kChartWidth - kMarginLeft - kMarginRight) * k / 4, 1) + "' y='" +
+           fixed(kChartHeight - 12, 1) + "' text-anchor='middle'>" + fixed(t, 1) + " s</text>";
   }
-  svg += "<text x='" + fixed(kLeft - 6, 1) + "' y='12' text-anchor='end'>mm</text>";
+  svg += "<text x='" + fixed(kMarginLeft - 6, 1) + "' y='12' text-anchor='end'>mm</text>";
   // the error, broken at flagged frames
   std::string path;
   bool pen = false;
@@ -86,8 +93,8 @@ std::string error_plot(const nlohmann::json& report) {
   }
   svg += "<path d='" + path + "' fill='none' stroke='#1f77b4' stroke-width='1.2'/>";
   const double mean = report.at("mean_error").get<double>() * 1000;
-  svg += "<line x1='" + fixed(kLeft, 1) + "' y1='" + fixed(y_of(mean), 1) + "' x2='" +
-         fixed(kW - kRight, 1) + "' y2='" + fixed(y_of(mean), 1) +
+  svg += "<line x1='" + fixed(kMarginLeft, 1) + "' y1='" + fixed(y_of(mean), 1) + "' x2='" +
+         fixed(kChartWidth - kMarginRight, 1) + "' y2='" + fixed(y_of(mean), 1) +
          "' stroke='#ff7f0e' stroke-dasharray='4 3'/>";
   svg += "</svg>";
   return svg;

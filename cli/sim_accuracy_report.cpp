@@ -86,7 +86,7 @@ void slide_box(IntegratorResult& r) {
                                              : std::numeric_limits<double>::infinity();
 }
 
-std::string fmt(double v) {
+std::string cell(double v) {
   if (!std::isfinite(v)) return "—";
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
@@ -166,11 +166,12 @@ std::string write_integrator_report(const std::vector<IntegratorResult>& results
     << "| integrator | step (ms) | finite | deepest (mm) | energy gain (J) | friction error | "
        "µs per simulated s | front |\n|---|---|---|---|---|---|---|---|\n";
   for (const IntegratorResult& r : results) {
-    o << "| " << sim::to_string(r.integrator) << " | " << fmt(r.step * 1e3) << " | "
-      << (r.finite ? "yes" : "no (blew up)") << " | " << (r.finite ? fmt(r.penetration * 1e3) : "—")
-      << " | " << (r.finite ? fmt(r.energy_gain) : "—") << " | "
-      << (r.finite ? fmt(r.friction_error) : "—") << " | "
-      << (r.finite ? fmt(r.us_per_second) : "—") << " | "
+    o << "| " << sim::to_string(r.integrator) << " | " << cell(r.step * 1e3) << " | "
+      << (r.finite ? "yes" : "no (blew up)") << " | "
+      << (r.finite ? cell(r.penetration * 1e3) : "—") << " | "
+      << (r.finite ? cell(r.energy_gain) : "—") << " | "
+      << (r.finite ? cell(r.friction_error) : "—") << " | "
+      << (r.finite ? cell(r.us_per_second) : "—") << " | "
       << (r.front_penetration ? "penetration " : "") << (r.front_friction ? "friction" : "")
       << " |\n";
   }

@@ -38,7 +38,7 @@ sim::Integrator integrator_from(JsonFields& f, const JsonField& field) {
   f.fail(field, io::in_quotes(name) + " is not one of implicit, semi_implicit, rk4");
 }
 
-sim::WorldSettings settings_from(JsonFields& f, const JsonField& root) {
+sim::WorldSettings world_settings_from(JsonFields& f, const JsonField& root) {
   sim::WorldSettings s;
   s.step = f.number_or(root["dt"], s.step, {1e-6, 0.1});
   if (root["integrator"]) s.integrator = integrator_from(f, root["integrator"]);
@@ -188,7 +188,8 @@ SimulationRun read_simulation_scene(const json& doc) {
                                  "contact", "integrator", "dt", "duration", "record_every"});
     SimulationRun run;
     try {
-      run.world = std::make_unique<sim::World>(settings_from(f, root), environment_from(f, root));
+      run.world =
+          std::make_unique<sim::World>(world_settings_from(f, root), environment_from(f, root));
     } catch (const sim::SimError& e) {
       f.fail(root, e.what());
     }

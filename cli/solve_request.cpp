@@ -49,7 +49,7 @@ ik::TaskMode mode_from(JsonFields& f, const JsonField& mode, ik::TaskMode fallba
 
 // The request's "dt" and its "settings" object (the session file's reader, animator/document_json);
 // the frame time is the request's own, so "settings.dt" is refused.
-ik::SolverSettings settings_from(JsonFields& f, const JsonField& r) {
+ik::SolverSettings solver_settings_from(JsonFields& f, const JsonField& r) {
   ik::SolverSettings s;
   s.dt = f.number_or(r["dt"], s.dt);
   const JsonField j = r["settings"];
@@ -191,7 +191,7 @@ SolveSpec read_request(JsonFields& f, const JsonField& r) {
   }
   const core::Model& m = *out.model;
   out.frames = static_cast<int>(f.integer_or(r["frames"], 120, 0, 1000000));
-  out.settings = settings_from(f, r);
+  out.settings = solver_settings_from(f, r);
   out.q = start_from(f, r["start"], m);
   read_physics(f, r, out);
   core::Data data(m);

@@ -15,7 +15,7 @@ bool plotted(const ScatterPoint& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && p.x > 0 && p.y > 0;
 }
 
-std::string number(double v) {
+std::string svg_number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
   return buf;
@@ -55,13 +55,13 @@ void write_scatter_svg(const ScatterPlot& plot, const std::string& path) {
     const double x = kLeft + (d - x0) / (x1 - x0) * pw;
     o << "<line x1=\"" << x << "\" y1=\"" << kTop << "\" x2=\"" << x << "\" y2=\"" << kTop + ph
       << "\" stroke=\"#ddd\"/><text x=\"" << x << "\" y=\"" << kTop + ph + 16
-      << "\" text-anchor=\"middle\">" << number(std::pow(10, d)) << "</text>\n";
+      << "\" text-anchor=\"middle\">" << svg_number(std::pow(10, d)) << "</text>\n";
   }
   for (double d = y0; d <= y1; ++d) {
     const double y = kTop + (1 - (d - y0) / (y1 - y0)) * ph;
     o << "<line x1=\"" << kLeft << "\" y1=\"" << y << "\" x2=\"" << kLeft + pw << "\" y2=\"" << y
       << "\" stroke=\"#ddd\"/><text x=\"" << kLeft - 6 << "\" y=\"" << y + 4
-      << "\" text-anchor=\"end\">" << number(std::pow(10, d)) << "</text>\n";
+      << "\" text-anchor=\"end\">" << svg_number(std::pow(10, d)) << "</text>\n";
   }
   o << "<text x=\"" << kLeft + pw / 2 << "\" y=\"" << kH - 16 << "\" text-anchor=\"middle\">"
     << plot.x_label << "</text>\n<text transform=\"translate(18," << kTop + ph / 2

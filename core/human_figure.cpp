@@ -13,8 +13,7 @@ namespace core {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr double deg(double d) { return d * kPi / 180.0; }
+constexpr double deg(double d) { return d * std::numbers::pi / 180.0; }
 
 // ---------------------------------------------------------------------------------------------
 // Segment data: de Leva (1996), "Adjustments to Zatsiorsky–Seluyanov's segment inertia
@@ -238,7 +237,7 @@ SphericalRange elliptic_range(const Quaternion& frame,
                               int n = 16) {
   std::vector<double> psi, swing, lo, hi;
   for (int k = 0; k < n; ++k) {
-    const double p = 2 * kPi * k / n;
+    const double p = 2 * std::numbers::pi * k / n;
     const double c = std::cos(p), s = std::sin(p);
     const double a = c >= 0 ? at0 : at180;
     const double b = s >= 0 ? at90 : at270;

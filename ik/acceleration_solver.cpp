@@ -5,12 +5,11 @@
 #include <cmath>
 
 #include "core/configuration.hpp"
+#include "ik/settings_checks.hpp"
 
 namespace ik {
 
 namespace {
-
-bool positive_finite(double x) { return std::isfinite(x) && x > 0; }
 
 double frequency_or(double gain, double fallback) { return gain >= 0 ? gain : fallback; }
 

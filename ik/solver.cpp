@@ -6,14 +6,13 @@
 
 #include "core/configuration.hpp"
 #include "core/kinematics.hpp"
+#include "ik/settings_checks.hpp"
 
 namespace ik {
 
 namespace {
 
 double gain_or(double g, double fallback) { return g >= 0 ? g : fallback; }
-
-bool positive_finite(double x) { return std::isfinite(x) && x > 0; }
 
 }  // namespace
 

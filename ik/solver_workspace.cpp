@@ -35,7 +35,7 @@ DampedGramInverse::DampedGramInverse(int rows)
       inverse(rows, rows) {}
 
 void DampedGramInverse::decompose(const Eigen::Ref<const Eigen::MatrixXd>& G) {
-  constexpr int kMaxIterations = 30;  // per eigenvalue, as SelfAdjointEigenSolver
+  constexpr int kEigenIterations = 30;  // per eigenvalue, as SelfAdjointEigenSolver
   const Eigen::Index m = G.rows();
   Eigen::MatrixXd& V = vectors;
   // map the coefficients to [−1, 1] against overflow and underflow
@@ -52,7 +52,7 @@ void DampedGramInverse::decompose(const Eigen::Ref<const Eigen::MatrixXd>& G) {
       .setShift(1)
       .evalTo(V, reflector_scratch);
   // implicit symmetric QR on T, rotating Q into V; eigenvalues ascending
-  Eigen::internal::computeFromTridiagonal_impl(sigma2, subdiagonal, kMaxIterations, true, V);
+  Eigen::internal::computeFromTridiagonal_impl(sigma2, subdiagonal, kEigenIterations, true, V);
   sigma2 *= scale;
 }
 

@@ -22,7 +22,7 @@ namespace {
 // bytes of a file read to recognize its format
 constexpr std::size_t kSniffBytes = 4096;
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
+[[noreturn]] void refuse(const std::string& path, const std::string& what) {
   throw ModelError({path + ": " + what});
 }
 
@@ -35,24 +35,25 @@ void check_format(const std::string& path, const std::string& ext, const std::st
   const char first = start < head.size() ? head[start] : '\0';
   if (ext == ".glb") {
     if (head.compare(0, 4, "glTF") != 0) {
-      fail(path, "not a GLB file (it does not start with 'glTF')");
+      refuse(path, "not a GLB file (it does not start with 'glTF')");
     }
   } else if (ext == ".gltf") {
-    if (has_nul || first != '{') fail(path, "not a glTF JSON file (it does not start with '{')");
+    if (has_nul || first != '{') refuse(path, "not a glTF JSON file (it does not start with '{')");
   } else if (ext == ".fbx") {
     const bool binary = head.compare(0, 18, "Kaydara FBX Binary") == 0;
     const bool ascii =
         !has_nul && (first == ';' || head.find("FBXHeaderExtension") != std::string::npos);
     if (!binary && !ascii) {
-      fail(path,
-           "not an FBX file (neither the 'Kaydara FBX Binary' signature nor an ASCII FBX header)");
+      refuse(
+          path,
+          "not an FBX file (neither the 'Kaydara FBX Binary' signature nor an ASCII FBX header)");
     }
   } else if (ext == ".dae") {
     if (has_nul || first != '<' || head.find("COLLADA") == std::string::npos) {
-      fail(path, "not a COLLADA file (no XML document with a COLLADA element at its start)");
+      refuse(path, "not a COLLADA file (no XML document with a COLLADA element at its start)");
     }
   } else {
-    fail(path, "unsupported extension '" + ext + "' (rule: .gltf, .glb, .fbx or .dae)");
+    refuse(path, "unsupported extension '" + ext + "' (rule: .gltf, .glb, .fbx or .dae)");
   }
 }
 
@@ -61,19 +62,19 @@ void check_format(const std::string& path, const std::string& ext, const std::st
 void check_file(const std::string& path, const ImportLimits& limits) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
-    fail(path, std::string("cannot open it: ") + std::strerror(errno));
+    refuse(path, std::string("cannot open it: ") + std::strerror(errno));
   }
-  if (!S_ISREG(st.st_mode)) fail(path, "not a regular file");
-  if (st.st_size == 0) fail(path, "the file is empty");
+  if (!S_ISREG(st.st_mode)) refuse(path, "not a regular file");
+  if (st.st_size == 0) refuse(path, "the file is empty");
   if (static_cast<std::uint64_t>(st.st_size) > limits.max_file_bytes) {
-    fail(path, std::to_string(st.st_size) + " bytes is more than the import limit of " +
-                   std::to_string(limits.max_file_bytes) + " bytes");
+    refuse(path, std::to_string(st.st_size) + " bytes is more than the import limit of " +
+                     std::to_string(limits.max_file_bytes) + " bytes");
   }
   // only the head is read here: the child reads the file itself
   std::string head(kSniffBytes, '\0');
   {
     std::ifstream in(path, std::ios::binary);
-    if (!in) fail(path, std::string("cannot open it: ") + std::strerror(errno));
+    if (!in) refuse(path, std::string("cannot open it: ") + std::strerror(errno));
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
   }
@@ -86,10 +87,10 @@ SkinnedImport import_skinned_file(const std::string& path,
                                   const ImportLimits& limits,
                                   const ImportOptions& options) {
   if (!(options.frame_rate > 0 && options.frame_rate <= 1000)) {
-    fail(path, "frame rate " + std::to_string(options.frame_rate) + " is outside (0, 1000]");
+    refuse(path, "frame rate " + std::to_string(options.frame_rate) + " is outside (0, 1000]");
   }
   if (!(options.total_mass > 0 && std::isfinite(options.total_mass))) {
-    fail(path, "total mass must be a finite number > 0");
+    refuse(path, "total mass must be a finite number > 0");
   }
   check_file(path, limits);
 
@@ -100,13 +101,13 @@ SkinnedImport import_skinned_file(const std::string& path,
   sl.max_reply_bytes = limits.max_reply_bytes;
   const SandboxResult r =
       run_sandboxed([&](int fd) { return assimp_detail::import_in_child(path, options, fd); }, sl);
-  if (r.status != SandboxStatus::kOk) fail(path, "the import process " + r.message);
+  if (r.status != SandboxStatus::kOk) refuse(path, "the import process " + r.message);
   try {
     return assimp_detail::decode_reply(path, r.reply);
   } catch (const ModelError&) {
     throw;
   } catch (const std::exception& e) {
-    fail(path, std::string("the import process sent a malformed reply: ") + e.what());
+    refuse(path, std::string("the import process sent a malformed reply: ") + e.what());
   }
 }
 

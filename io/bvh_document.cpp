@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "io/bvh_euler.hpp"
+#include "io/bvh_text.hpp"
 
 namespace io {
 
@@ -31,11 +32,11 @@ int BvhDocument::joint_count() const {
 }
 
 Matrix3 bvh_joint_rotation(const BvhNode& node, const double* frame_values) {
-  constexpr double kDegree = std::numbers::pi / 180.0;
   Matrix3 R = Matrix3::Identity();
   for (std::size_t k = 0; k < node.channels.size(); ++k) {
     const BvhChannel c = node.channels[k];
-    if (is_rotation(c)) R = R * elementary_rotation(channel_axis(c), frame_values[k] * kDegree);
+    if (is_rotation(c))
+      R = R * elementary_rotation(channel_axis(c), frame_values[k] * bvh_detail::kDegree);
   }
   return R;
 }

@@ -17,9 +17,9 @@ using namespace core;  // io reads and writes core's types
 
 namespace {
 
+using bvh_detail::kDegree;
 using bvh_detail::num;
 
-constexpr double kDegree = std::numbers::pi / 180.0;
 // a figure smaller than this (metres) has no extent: radii squared would underflow into links of
 // mass without inertia
 constexpr double kNoExtent = 1e-6;
@@ -318,17 +318,17 @@ struct Candidate {
   double scale;
   const char* unit;
 };
-constexpr Candidate kUnits[] = {{"m", 1.0, "metres"},
-                                {"cm", 0.01, "centimetres"},
-                                {"mm", 0.001, "millimetres"},
-                                {"in", 0.0254, "inches"},
-                                {"cmu", kCmuUnit, "CMU units (1/0.45 inch)"}};
+constexpr Candidate kUnitCandidates[] = {{"m", 1.0, "metres"},
+                                         {"cm", 0.01, "centimetres"},
+                                         {"mm", 0.001, "millimetres"},
+                                         {"in", 0.0254, "inches"},
+                                         {"cmu", kCmuUnit, "CMU units (1/0.45 inch)"}};
 
 }  // namespace
 
 std::optional<double> parse_bvh_import_unit(std::string_view name, std::string_view field) {
   if (name.empty() || bvh_detail::iequals(name, "auto")) return std::nullopt;
-  for (const Candidate& c : kUnits) {
+  for (const Candidate& c : kUnitCandidates) {
     if (bvh_detail::iequals(name, c.key)) return c.scale;
   }
   throw std::invalid_argument(std::string(field) + ": '" + std::string(name) +
@@ -336,7 +336,7 @@ std::optional<double> parse_bvh_import_unit(std::string_view name, std::string_v
 }
 
 std::string bvh_unit_name(double scale) {
-  for (const Candidate& c : kUnits) {
+  for (const Candidate& c : kUnitCandidates) {
     if (scale == c.scale) return c.unit;
   }
   return num(scale) + " m per unit";
@@ -348,7 +348,7 @@ BvhUnit bvh_auto_scale(const BvhDocument& doc) {
   constexpr double kTypical = 1.7;  // metres, a standing adult or an arm span
   BvhUnit best{1.0, ""};
   double best_error = kInfinity;
-  for (const Candidate& c : kUnits) {
+  for (const Candidate& c : kUnitCandidates) {
     const double error = std::abs(std::log(size * c.scale / kTypical));
     if (error < best_error) {
       best_error = error;
@@ -369,7 +369,9 @@ BvhTranslationJoints bvh_translation_joints(const Model& model, const BvhLayout&
   BvhTranslationJoints out;
   for (std::size_t k = 1; k < layout.joints.size(); ++k) {  // joints[0] is the ROOT
     const BvhLayout::Joint& j = layout.joints[k];
-    if (std::all_of(j.channels.begin(), j.channels.end(), is_rotation)) continue;
+    if (std::all_of(j.channels.begin(), j.channels.end(),
+                    [](BvhChannel c) { return is_rotation(c); }))
+      continue;
     const int link = model.link_index(j.name);
     if (link < 1) continue;
     (model.joint_type[link] == JointType::kFree ? out.translating : out.constant).push_back(j.name);

@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <string_view>
 
@@ -24,6 +25,9 @@ inline bool iequals(std::string_view a, std::string_view b) {
   }
   return true;
 }
+
+/// Degrees to radians: BVH rotation channels are in degrees.
+inline constexpr double kDegree = std::numbers::pi / 180.0;
 
 /// A number as it appears in a message (%.9g).
 inline std::string num(double v) {

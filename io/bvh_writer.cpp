@@ -20,9 +20,8 @@ using namespace core;  // io reads and writes core's types
 
 namespace {
 
+using bvh_detail::kDegree;
 using bvh_detail::num;
-
-constexpr double kDegree = std::numbers::pi / 180.0;
 
 // how one written node takes its values from the model
 struct Written {

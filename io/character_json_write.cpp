@@ -111,12 +111,12 @@ void print(const Node& n, int indent, std::string& out) {
   }
 }
 
-Node num(double x) { return Node::scalar(json_number(x)); }
+Node number_node(double x) { return Node::scalar(json_number(x)); }
 Node str(const std::string& s, const char* what) { return Node::scalar(json_string(s, what)); }
 template <typename Vec>
 Node vec(const Vec& v) {
   Node a = Node::array();
-  for (int k = 0; k < v.size(); ++k) a.push(num(v[k]));
+  for (int k = 0; k < v.size(); ++k) a.push(number_node(v[k]));
   return a;
 }
 Node quat(const Quaternion& q) { return vec(Eigen::Vector4d(q.w(), q.x(), q.y(), q.z())); }
@@ -139,16 +139,16 @@ std::optional<Node> origin_node(const Transform& X) {
 Node inertial_node(const SpatialInertia& S) {
   const InertiaForm f = inertia_form(S);
   Node o = Node::object();
-  o.add("mass", num(S.mass));
+  o.add("mass", number_node(S.mass));
   if (f.com != Vector3::Zero()) o.add("com", vec(f.com));
   if (f.I == f.I.transpose()) {
     Node in = Node::object();
-    in.add("ixx", num(f.I(0, 0)));
-    in.add("iyy", num(f.I(1, 1)));
-    in.add("izz", num(f.I(2, 2)));
-    in.add("ixy", num(f.I(0, 1)));
-    in.add("ixz", num(f.I(0, 2)));
-    in.add("iyz", num(f.I(1, 2)));
+    in.add("ixx", number_node(f.I(0, 0)));
+    in.add("iyy", number_node(f.I(1, 1)));
+    in.add("izz", number_node(f.I(2, 2)));
+    in.add("ixy", number_node(f.I(0, 1)));
+    in.add("ixz", number_node(f.I(0, 2)));
+    in.add("iyz", number_node(f.I(1, 2)));
     o.add("inertia", std::move(in));
   } else {
     o.add("inertia", rows(f.I));  // not symmetric to the last bit: all nine entries
@@ -165,8 +165,8 @@ Node geometry_node(const Geometry& g) {
       g.shape == S::kSphere || g.shape == S::kCapsule || g.shape == S::kCylinder;
   const bool uses_length = g.shape == S::kCapsule || g.shape == S::kCylinder;
   // fields a shape does not use are written only when set, so nothing in the model is lost
-  if (uses_radius || g.radius != 0) o.add("radius", num(g.radius));
-  if (uses_length || g.length != 0) o.add("length", num(g.length));
+  if (uses_radius || g.radius != 0) o.add("radius", number_node(g.radius));
+  if (uses_length || g.length != 0) o.add("length", number_node(g.length));
   if (g.shape == S::kBox || g.size != Vector3::Zero()) o.add("size", vec(g.size));
   if (g.shape == S::kMesh || !g.mesh.empty()) o.add("mesh", str(g.mesh, "mesh path"));
   if (g.scale != Vector3::Ones()) o.add("scale", vec(g.scale));
@@ -184,10 +184,10 @@ std::optional<Node> limits_node(const JointLimits& L, const std::string& jname) 
   if (L.upper == -kInfinity) unrepresentable("upper limit -inf");
   if (L.velocity == -kInfinity || L.effort == -kInfinity) unrepresentable("a limit of -inf");
   Node l = Node::object();
-  if (std::isfinite(L.lower)) l.add("lower", num(L.lower));
-  if (std::isfinite(L.upper)) l.add("upper", num(L.upper));
-  if (std::isfinite(L.velocity)) l.add("velocity", num(L.velocity));
-  if (std::isfinite(L.effort)) l.add("effort", num(L.effort));
+  if (std::isfinite(L.lower)) l.add("lower", number_node(L.lower));
+  if (std::isfinite(L.upper)) l.add("upper", number_node(L.upper));
+  if (std::isfinite(L.velocity)) l.add("velocity", number_node(L.velocity));
+  if (std::isfinite(L.effort)) l.add("effort", number_node(L.effort));
   if (l.empty()) return std::nullopt;
   return l;
 }
@@ -235,8 +235,8 @@ Node joint_node(const Model& m, int i) {
   const double weight = m.ik_weight[i];
   if (weight != 1.0 || m.ik_gain[i]) {
     Node ik = Node::object();
-    if (weight != 1.0) ik.add("weight", num(weight));
-    if (m.ik_gain[i]) ik.add("gain", num(*m.ik_gain[i]));
+    if (weight != 1.0) ik.add("weight", number_node(weight));
+    if (m.ik_gain[i]) ik.add("gain", number_node(*m.ik_gain[i]));
     j.add("ik", std::move(ik));
   }
   return j;

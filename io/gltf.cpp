@@ -49,8 +49,8 @@ std::vector<std::string> node_names(const Model& model) {
 }
 
 std::vector<double> vec3(const Vector3& v) { return {v.x(), v.y(), v.z()}; }
-// glTF quaternion order is (x, y, z, w)
-std::vector<double> quat(const Quaternion& q) { return {q.x(), q.y(), q.z(), q.w()}; }
+// a rotation as glTF writes it: x, y, z, w
+std::vector<double> xyzw(const Quaternion& q) { return {q.x(), q.y(), q.z(), q.w()}; }
 
 // column-major 4x4 of a rigid transform, as a glTF MAT4 (bottom row exactly 0 0 0 1)
 void append_mat4(const Transform& X, std::vector<float>& out) {
@@ -141,7 +141,7 @@ void add_link_nodes(Parts& d, const Eigen::VectorXd& q0) {
     tinygltf::Node& n = d.doc.nodes[i - 1];
     n.name = d.node_name[i];
     n.translation = vec3(X.translation);
-    n.rotation = quat(X.rotation.normalized());
+    n.rotation = xyzw(X.rotation.normalized());
     if (d.node_name[i] != model.link_name[i]) {
       n.extras =
           tinygltf::Value(tinygltf::Value::Object{{"link", tinygltf::Value(model.link_name[i])}});

@@ -16,7 +16,7 @@ using namespace core;  // io reads and writes core's types
 
 namespace {
 
-std::string num(double x) {
+std::string six_digits(double x) {
   std::ostringstream s;
   s.precision(6);
   s << x;
@@ -67,7 +67,7 @@ class Converter {
         if (j.limits) {
           spec.limits = {j.limits->lower, j.limits->upper, j.limits->velocity, j.limits->effort};
           if (j.limits->lower == j.limits->upper) {
-            warnings.push_back(who + ": lower = upper = " + num(j.limits->lower) +
+            warnings.push_back(who + ": lower = upper = " + six_digits(j.limits->lower) +
                                "; the joint cannot move inside its limits");
           }
         }

@@ -57,7 +57,7 @@ double deepest(const Session& s, const FloorContacts& floor, const std::vector<d
   return out;
 }
 
-struct Gesture {
+struct DragOutcome {
   double feet_drift = 0;  // largest distance of a foot from where it stood (m)
   double deepest = -std::numeric_limits<double>::infinity();  // below the floor, any frame
   Vector3 link_end = Vector3::Zero();                         // where the dragged link ended
@@ -65,13 +65,13 @@ struct Gesture {
 };
 
 // drags `link` by `offset` over one second at 60 frames/s, sampling every frame
-Gesture drag(Session& s, const char* link, const Vector3& offset) {
+DragOutcome drag(Session& s, const char* link, const Vector3& offset) {
   const FloorContacts floor(s.model());
   const char* feet[] = {"l_foot", "r_foot"};
   const Vector3 feet0[] = {position(s, feet[0]), position(s, feet[1])};
   const Vector3 start = position(s, link);
   const std::vector<double> allowed = allowed_heights(s, floor);
-  Gesture g;
+  DragOutcome g;
   s.drag_begin(s.model().link_index(link), start);
   for (int frame = 1; frame <= 60; ++frame) {
     s.drag_move(start + offset * std::min(1.0, frame / 45.0));
@@ -101,7 +101,7 @@ TEST(FloorContacts, AHandDraggedUpBendsTheFigureAndTheFeetStayWhereTheyStand) {
   // 0.5 m up and 0.3 m forward over 0.75 s, nothing pinned
   Session s = session(true);
   const Vector3 offset(0.0, 0.5, 0.3);
-  const Gesture g = drag(s, "r_hand", offset);
+  const DragOutcome g = drag(s, "r_hand", offset);
   std::printf("hand up, floor on: feet drift %.2f mm, deepest %.2f mm\n", 1e3 * g.feet_drift,
               1e3 * g.deepest);
   EXPECT_LT(g.feet_drift, 0.001);
@@ -109,7 +109,7 @@ TEST(FloorContacts, AHandDraggedUpBendsTheFigureAndTheFeetStayWhereTheyStand) {
   EXPECT_LT(g.deepest_at_rest, 0.001);
 
   Session off = session(false);
-  const Gesture free = drag(off, "r_hand", offset);
+  const DragOutcome free = drag(off, "r_hand", offset);
   std::printf("hand up, floor off: feet drift %.1f mm\n", 1e3 * free.feet_drift);
   EXPECT_GT(free.feet_drift, 0.05) << "without the floor the drag lifts the figure";
 }
@@ -120,7 +120,7 @@ TEST(FloorContacts, AFigurePushedDownFoldsOntoTheFloorAndNotThroughIt) {
   // at most as deep as the drag travels in one frame (1/45 of the push here)
   for (const double push : {0.6, 1.2}) {
     Session s = session(true);
-    const Gesture g = drag(s, "pelvis", Vector3(0, -push, 0));
+    const DragOutcome g = drag(s, "pelvis", Vector3(0, -push, 0));
     std::printf(
         "pelvis %.1f m down, floor on: deepest %.2f mm in motion, %.2f mm at rest, feet drift "
         "%.2f mm, pelvis at %.3f m\n",
@@ -135,7 +135,7 @@ TEST(FloorContacts, AFigurePushedDownFoldsOntoTheFloorAndNotThroughIt) {
     EXPECT_LT(g.deepest_at_rest, push / 45);
 
     Session off = session(false);
-    const Gesture through = drag(off, "pelvis", Vector3(0, -push, 0));
+    const DragOutcome through = drag(off, "pelvis", Vector3(0, -push, 0));
     std::printf("pelvis %.1f m down, floor off: deepest %.1f mm\n", push, 1e3 * through.deepest);
     EXPECT_GT(through.deepest, 0.1) << "without the floor the figure sinks through it";
   }
@@ -144,7 +144,7 @@ TEST(FloorContacts, AFigurePushedDownFoldsOntoTheFloorAndNotThroughIt) {
 TEST(FloorContacts, ADraggedFootLeavesTheFloorAndTheOtherStays) {
   Session s = session(true);
   const Vector3 l_foot0 = position(s, "l_foot");
-  const Gesture g = drag(s, "r_foot", Vector3(0, 0.2, 0.1));
+  const DragOutcome g = drag(s, "r_foot", Vector3(0, 0.2, 0.1));
   EXPECT_GT(g.link_end.y() - position(s, "l_foot").y(), 0.1) << "the dragged foot is lifted";
   EXPECT_LT((position(s, "l_foot") - l_foot0).norm(), 0.001);
 }
@@ -152,7 +152,7 @@ TEST(FloorContacts, ADraggedFootLeavesTheFloorAndTheOtherStays) {
 TEST(FloorContacts, UserPinsAreNotDoubledAndContactsEndWithTheGesture) {
   Session s = session(true);
   s.pin(s.model().link_index("l_foot"), ik::TaskMode::kPose);
-  const Gesture g = drag(s, "r_hand", Vector3(0.2, 0.2, 0));
+  const DragOutcome g = drag(s, "r_hand", Vector3(0.2, 0.2, 0));
   EXPECT_LT(g.feet_drift, 0.001);
   animator_test::run(s, 120);  // settled
   EXPECT_FALSE(s.needs_tick());

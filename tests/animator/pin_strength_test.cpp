@@ -27,7 +27,7 @@ struct Squat {
   double chest_tilt = 0;       // the chest's orientation at the end against its start (rad)
 };
 
-const char* const feet[] = {"l_foot", "r_foot"};
+const char* const kFeet[] = {"l_foot", "r_foot"};
 
 // pins a foot in pose where it stands; returns where that is
 Vector3 pin_foot(Session& s, const char* foot) {
@@ -36,7 +36,7 @@ Vector3 pin_foot(Session& s, const char* foot) {
 }
 
 Squat squat(Session& s, double depth) {
-  const Vector3 pinned[2] = {pin_foot(s, feet[0]), pin_foot(s, feet[1])};
+  const Vector3 pinned[2] = {pin_foot(s, kFeet[0]), pin_foot(s, kFeet[1])};
   const Vector3 pelvis0 = position(s, "pelvis");
   const int chest = s.model().link_index("chest");
   const core::Matrix3 chest0 = s.kinematics().X_W[chest].R;
@@ -54,7 +54,7 @@ Squat squat(Session& s, double depth) {
     s.drag_move(pelvis0 - Vector3(0, depth * std::min(1.0, frame / 30.0), 0));
     s.tick(1.0 / 60);
     for (int k = 0; k < 2; ++k) {
-      out.drift = std::max(out.drift, (position(s, feet[k]) - pinned[k]).norm());
+      out.drift = std::max(out.drift, (position(s, kFeet[k]) - pinned[k]).norm());
     }
     out.range_violation = std::max(out.range_violation, ik::max_range_violation(s.model(), s.q()));
   }
@@ -131,7 +131,7 @@ struct Hold {
 
 // both feet pinned, a hand pulled `far` metres sideways in half a second and then held there
 Hold hold_out_of_reach(Session& s, const Vector3& far) {
-  const Vector3 pinned[2] = {pin_foot(s, feet[0]), pin_foot(s, feet[1])};
+  const Vector3 pinned[2] = {pin_foot(s, kFeet[0]), pin_foot(s, kFeet[1])};
   const Vector3 hand0 = position(s, "r_hand");
   s.drag_begin(s.model().link_index("r_hand"), hand0);
   Hold out;
@@ -142,7 +142,7 @@ Hold hold_out_of_reach(Session& s, const Vector3& far) {
     const Eigen::VectorXd before = s.q();
     s.tick(kDt);
     for (int k = 0; k < 2; ++k) {
-      out.drift = std::max(out.drift, (position(s, feet[k]) - pinned[k]).norm());
+      out.drift = std::max(out.drift, (position(s, kFeet[k]) - pinned[k]).norm());
     }
     if (frame == 90) hand_mid = position(s, "r_hand");
     if (frame > 90) {

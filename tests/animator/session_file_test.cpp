@@ -19,13 +19,9 @@
 namespace {
 
 using namespace animator;
+using animator_test::human;
 using animator_test::session_file_error;
 using nlohmann::json;
-
-std::shared_ptr<const core::Model> human() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
 
 // A saved session with a pin, a key and an edit layer.
 json saved() {

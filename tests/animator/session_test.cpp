@@ -15,6 +15,7 @@
 #include "core/human_figure.hpp"
 #include "core/kinematics.hpp"
 #include "io/bvh.hpp"
+#include "tests/animator/animator_fixtures.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {
@@ -23,39 +24,10 @@ using namespace animator;
 using core::Quaternion;
 using core::Vector3;
 
-std::shared_ptr<const core::Model> human() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
-
-Vector3 position(const Session& s, const char* link) {
-  return s.kinematics().X_W[s.model().link_index(link)].p;
-}
-
-void run(Session& s, int ticks, double dt = 1.0 / 60) {
-  for (int k = 0; k < ticks; ++k) s.tick(dt);
-}
-
-// A synthetic clip of the figure: arms swinging, knees bending, the root bobbing (2 s at 30 fps).
-core::Clip swinging_clip(const core::Model& m, int frames = 60) {
-  core::Clip c;
-  c.frame_time = 1.0 / 30;
-  for (int f = 0; f < frames; ++f) {
-    const double t = f * c.frame_time;
-    Eigen::VectorXd q = core::neutral_configuration(m);
-    q[1] += 0.02 * std::sin(2 * std::numbers::pi * t);  // root height
-    for (const char* arm : {"l_uarm", "r_uarm"}) {
-      const int j = m.link_index(arm);
-      core::set_quaternion_at(q, m.idx_q[j],
-                              Quaternion(Eigen::AngleAxisd(0.4 * std::sin(2 * std::numbers::pi * t),
-                                                           Vector3::UnitX())));
-    }
-    for (const char* knee : {"l_shank", "r_shank"})
-      q[m.idx_q[m.link_index(knee)]] = 0.3 + 0.2 * std::sin(std::numbers::pi * t);
-    c.frames.push_back(q);
-  }
-  return c;
-}
+using animator_test::human;
+using animator_test::position;
+using animator_test::run;
+using animator_test::swinging_clip;
 
 TEST(Session, DragGestureMovesTheHandAndIsOneUndoEntry) {
   Session s(human(), "human48");

@@ -19,7 +19,7 @@ namespace {
 using core::Vector3;
 
 // the human figure in its rest pose, moving, with contact wrenches on both feet
-struct Scene {
+struct HumanScene {
   std::shared_ptr<const core::Model> model = core::build_human_figure({});
   core::Data data{*model};
   Eigen::VectorXd q, v, bias, contact;
@@ -27,7 +27,7 @@ struct Scene {
   ik::Problem problem;
   int drag = 0;
 
-  explicit Scene(bool with_contact) {
+  explicit HumanScene(bool with_contact) {
     const core::Model& m = *model;
     q = core::rest_configuration(m);
     v = 0.3 * core::difference(m, q, core::random_configuration(m, 7));
@@ -79,7 +79,7 @@ struct Scene {
 
 TEST(AccelerationSolver, RootRowsAreMetByTheContactForcesAlone) {
   for (const bool with_contact : {false, true}) {
-    Scene s(with_contact);
+    HumanScene s(with_contact);
     ik::AccelerationSolver solver(*s.model);
     const ik::AccelerationReport& r = solver.solve(s.problem, s.data, s.q, s.v, s.bias, s.contact);
     ASSERT_EQ(r.status, ik::AccelerationReport::Status::kOk) << r.message;
@@ -90,7 +90,7 @@ TEST(AccelerationSolver, RootRowsAreMetByTheContactForcesAlone) {
 }
 
 TEST(AccelerationSolver, ForwardDynamicsWithTheTorquesReproducesTheAccelerations) {
-  Scene s(true);
+  HumanScene s(true);
   ik::AccelerationSolver solver(*s.model);
   solver.solve(s.problem, s.data, s.q, s.v, s.bias, s.contact);
   core::Data fd(*s.model);
@@ -101,7 +101,7 @@ TEST(AccelerationSolver, ForwardDynamicsWithTheTorquesReproducesTheAccelerations
 // A drag the joints cannot follow (a stiff gain on a far target) is cut to the bounds of the
 // settings; the root rows still hold, so the cut costs the drag, never the physics.
 TEST(AccelerationSolver, JointAccelerationsAndSpeedsStayWithinTheirBounds) {
-  Scene s(true);
+  HumanScene s(true);
   s.problem.get<ik::LinkTask>(s.drag)->gain = 400;  // ω: 1.6e5 × 0.06 m ≈ 1e4 m/s² asked
   ik::AccelerationSettings settings;
   settings.max_joint_acceleration = 150;
@@ -124,7 +124,7 @@ TEST(AccelerationSolver, JointAccelerationsAndSpeedsStayWithinTheirBounds) {
 }
 
 TEST(AccelerationSolver, TheDraggedPointAcceleratesAsCommanded) {
-  Scene s(true);
+  HumanScene s(true);
   ik::AccelerationSolver solver(*s.model);
   solver.solve(s.problem, s.data, s.q, s.v, s.bias, s.contact);
   const core::Model& m = *s.model;
@@ -141,7 +141,7 @@ TEST(AccelerationSolver, TheDraggedPointAcceleratesAsCommanded) {
 }
 
 TEST(AccelerationSolver, DoesNotAllocateOnceSized) {
-  Scene s(true);
+  HumanScene s(true);
   ik::AccelerationSolver solver(*s.model);
   solver.solve(s.problem, s.data, s.q, s.v, s.bias, s.contact);
   fixtures::AllocationCounter allocations;
@@ -152,7 +152,7 @@ TEST(AccelerationSolver, DoesNotAllocateOnceSized) {
 }
 
 TEST(AccelerationSolver, RefusesAFixedRootAndTooManyDragRows) {
-  Scene s(false);
+  HumanScene s(false);
   ik::AccelerationSolver solver(*s.model);
   for (int k = 0; k < 2; ++k) {
     ik::LinkTask d{.role = ik::kDrag, .link = s.model->link_index("r_hand")};

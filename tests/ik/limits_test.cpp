@@ -19,7 +19,7 @@ using core::Quaternion;
 using core::Vector3;
 
 // the branching tree's hinge has limits [−1, 2] rad, its slider [−0.2, 0.3] m
-struct Tree {
+struct RangeTree {
   std::shared_ptr<const core::Model> model = fixtures::branching_tree();
   Eigen::VectorXd q = core::neutral_configuration(*model);
   std::vector<RangeRow> rows;
@@ -34,7 +34,7 @@ bool in_range(const core::Model& m, int joint, const Quaternion& r) {
 }
 
 TEST(Limits, OneDofJointsOutsideTheirLimitsGetAPullBackRow) {
-  Tree t;
+  RangeTree t;
   t.angle() = 2.3;                        // 0.3 above the upper limit
   t.q[t.model->idx_q[t.slider]] = -0.25;  // 0.05 below the lower limit
   collect_range_violations(*t.model, t.q, 20.0, 5.0, t.rows, t.flags);
@@ -50,7 +50,7 @@ TEST(Limits, OneDofJointsOutsideTheirLimitsGetAPullBackRow) {
 }
 
 TEST(Limits, JointsInsideTheirRangesGetNoRows) {
-  Tree t;
+  RangeTree t;
   t.angle() = 1.999;
   collect_range_violations(*t.model, t.q, 20.0, 5.0, t.rows, t.flags);
   EXPECT_TRUE(t.rows.empty());
@@ -58,7 +58,7 @@ TEST(Limits, JointsInsideTheirRangesGetNoRows) {
 }
 
 TEST(Limits, PredictedCrossingStopsTheJointInsideTheMargin) {
-  Tree t;
+  RangeTree t;
   t.angle() = 1.9;
   Eigen::VectorXd v = Eigen::VectorXd::Zero(t.model->nv);
   const int iv = t.model->idx_v[t.hinge];
@@ -77,7 +77,7 @@ TEST(Limits, PredictedCrossingStopsTheJointInsideTheMargin) {
 }
 
 TEST(Limits, JointInsideTheMarginBandIsHeldNotPushedBack) {
-  Tree t;
+  RangeTree t;
   t.angle() = 2.0 - 0.005;  // already closer than the 0.01 margin
   Eigen::VectorXd v = Eigen::VectorXd::Zero(t.model->nv);
   v[t.model->idx_v[t.hinge]] = 1.0;

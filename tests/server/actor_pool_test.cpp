@@ -2,6 +2,7 @@
 // workers at once, a wake during a step runs it once more, deadlines run it on time and can be
 // moved, and a removed job never runs again.
 #include "server/actor_pool.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,14 +20,7 @@ namespace {
 using server::ActorPool;
 using namespace std::chrono_literals;
 
-bool eventually(const std::function<bool()>& done) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
+using fixtures::eventually;
 
 // A job that counts its steps, records which threads ran it and whether two steps overlapped.
 class CountingJob : public ActorPool::Job {

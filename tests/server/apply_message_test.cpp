@@ -10,6 +10,7 @@
 #include "animator/session_file.hpp"
 #include "io/bundled_characters.hpp"
 #include "server/protocol.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -18,11 +19,6 @@ using nlohmann::json;
 namespace s = server;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::shared_ptr<const core::Model> human() {
-  static const auto model = io::load_character("human48").model;
-  return model;
-}
 
 s::Position position_of(const Session& session, const std::string& link) {
   const core::Vector3 p = session.kinematics().X_W[session.model().link_index(link)].p;
@@ -40,10 +36,10 @@ std::string refusal(Session& session, const s::ClientMessage& m) {
 }
 
 TEST(ApplyMessage, MessagesDriveTheSessionAsItsOwnCallsDo) {
-  Session by_message(human(), "human48");
-  Session by_call(human(), "human48");
-  const int foot = human()->link_index("l_foot");
-  const int hand = human()->link_index("r_hand");
+  Session by_message(fixtures::bundled_human48(), "human48");
+  Session by_call(fixtures::bundled_human48(), "human48");
+  const int foot = fixtures::bundled_human48()->link_index("l_foot");
+  const int hand = fixtures::bundled_human48()->link_index("r_hand");
   const s::Position p = position_of(by_call, "r_hand");
   const core::Vector3 hand_W(p[0], p[1], p[2]);
 
@@ -108,7 +104,7 @@ TEST(ApplyMessage, MessagesDriveTheSessionAsItsOwnCallsDo) {
 }
 
 TEST(ApplyMessage, LayersAreMutedReweightedAndRemoved) {
-  Session session(human(), "human48");
+  Session session(fixtures::bundled_human48(), "human48");
   core::Clip clip;
   clip.frame_time = 0.1;
   clip.frames.assign(10, session.q());
@@ -133,7 +129,7 @@ TEST(ApplyMessage, LayersAreMutedReweightedAndRemoved) {
 }
 
 TEST(ApplyMessage, SessionErrorsComeBackNamedByTypeAndField) {
-  Session session(human(), "human48");
+  Session session(fixtures::bundled_human48(), "human48");
   const std::vector<std::pair<s::ClientMessage, std::string>> cases = {
       {s::Pin{.link = "tail"}, "pin.link: no link named \"tail\""},
       {s::DragBegin{.link = "nose"}, "drag_begin.link: no link named \"nose\""},
@@ -192,7 +188,7 @@ TEST(ApplyMessage, IntegersAreRangeCheckedNeverWrapped) {
       {R"({"type": "hello", "protocol": 4294967297})",
        "hello.protocol: 4294967297 is out of range (rule: an integer in [0, 2147483647])"},
   };
-  Session session(human(), "human48");
+  Session session(fixtures::bundled_human48(), "human48");
   const json before = animator::session_to_json(session);
   for (const auto& [text, expected] : cases) {
     std::string message;

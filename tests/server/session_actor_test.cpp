@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "io/bundled_characters.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -26,15 +27,7 @@ namespace fs = std::filesystem;
 
 constexpr auto kPatience = std::chrono::seconds(10);
 
-// Polls `done` until it holds or kPatience has passed.
-bool eventually(const std::function<bool()>& done) {
-  const auto deadline = std::chrono::steady_clock::now() + kPatience;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return true;
-}
+using fixtures::eventually;
 
 // A connection as the actor sees it: keeps every text message (parsed) and pose frame.
 class Recorder final : public server::SessionSubscriber {

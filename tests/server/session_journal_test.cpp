@@ -25,17 +25,13 @@
 #include "server/apply_message.hpp"
 #include "server/protocol.hpp"
 #include "server/session_actor.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using server::SessionJournal;
-
-std::shared_ptr<const core::Model> human() {
-  static const auto model = io::load_character("human48").model;
-  return model;
-}
 
 // A fresh folder per test.
 class TempDir {
@@ -208,7 +204,7 @@ class RandomEditor {
 TEST(SessionJournal, ReplayReproducesTheSessionBitForBit) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  animator::Session live(human(), "human48");
+  animator::Session live(fixtures::bundled_human48(), "human48");
   auto journal = SessionJournal::start(path, live);
   RandomEditor editor(live, 11);
   int recorded = 0, snapshots = 0;
@@ -233,7 +229,7 @@ TEST(SessionJournal, ReplayReproducesTheSessionBitForBit) {
 TEST(SessionJournal, ACrashBetweenSnapshotAndTruncationReplaysNothingTwice) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  animator::Session live(human(), "human48");
+  animator::Session live(fixtures::bundled_human48(), "human48");
   auto journal = SessionJournal::start(path, live);
   RandomEditor editor(live, 5);
   for (int k = 0; k < 60; ++k) {
@@ -261,7 +257,7 @@ TEST(SessionJournal, ACrashBetweenSnapshotAndTruncationReplaysNothingTwice) {
 TEST(SessionJournal, ATornRecordIsDroppedAndADamagedOneIsKeptAside) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  animator::Session live(human(), "human48");
+  animator::Session live(fixtures::bundled_human48(), "human48");
   auto journal = SessionJournal::start(path, live);
   live.key_insert(0.0);
   journal->record(live, json{{"type", "key_insert"}});
@@ -298,7 +294,7 @@ TEST(SessionJournal, ATornRecordIsDroppedAndADamagedOneIsKeptAside) {
 TEST(SessionJournal, SessionFilesAndJournalsAreOwnerOnly) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  animator::Session live(human(), "human48");
+  animator::Session live(fixtures::bundled_human48(), "human48");
   auto journal = SessionJournal::start(path, live);
   EXPECT_EQ(mode_of(path), 0600u);
   EXPECT_EQ(mode_of(SessionJournal::journal_path(path)), 0600u);
@@ -318,7 +314,7 @@ TEST(SessionJournal, SessionFilesAndJournalsAreOwnerOnly) {
 TEST(SessionJournal, SnapshotsRunInTheBackgroundAndWaitAfterAFailure) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  animator::Session live(human(), "human48");
+  animator::Session live(fixtures::bundled_human48(), "human48");
   auto journal = SessionJournal::start(path, live);
   auto edit_many = [&] {
     for (std::size_t k = 0; k < SessionJournal::kSnapshotRecords; ++k) {
@@ -359,7 +355,7 @@ TEST(SessionJournal, SnapshotsRunInTheBackgroundAndWaitAfterAFailure) {
 
 // --- the actor --------------------------------------------------------------------------------
 
-class Recorder final : public server::SessionSubscriber {
+class JournalRecorder final : public server::SessionSubscriber {
  public:
   void send_text(std::string message) override {
     std::lock_guard lock(mutex_);
@@ -392,9 +388,10 @@ class Recorder final : public server::SessionSubscriber {
 TEST(SessionJournal, AnEditThatCannotBeWrittenGetsAnErrorAndIsTakenBackExactly) {
   TempDir dir;
   const std::string path = dir.file("s.json");
-  server::SessionActor actor("0123456789abcdef0123456789abcdef",
-                             std::make_unique<animator::Session>(human(), "human48"), path);
-  auto recorder = std::make_shared<Recorder>();
+  server::SessionActor actor(
+      "0123456789abcdef0123456789abcdef",
+      std::make_unique<animator::Session>(fixtures::bundled_human48(), "human48"), path);
+  auto recorder = std::make_shared<JournalRecorder>();
   actor.subscribe(1, recorder);
   auto post = [&](json m, int id) {
     m["id"] = id;
@@ -423,7 +420,7 @@ TEST(SessionJournal, AnEditThatCannotBeWrittenGetsAnErrorAndIsTakenBackExactly) 
                 std::string::npos)
           << answer;
       EXPECT_EQ(state(), before) << m;
-      recorder = std::make_shared<Recorder>();
+      recorder = std::make_shared<JournalRecorder>();
       actor.subscribe(1, recorder);
     }
     // an edit by call() (an HTTP upload) throws, and is taken back too

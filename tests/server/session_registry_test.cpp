@@ -18,6 +18,7 @@
 
 #include "io/bundled_characters.hpp"
 #include "server/mesh_binary.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -29,14 +30,7 @@ std::unique_ptr<animator::Session> new_session() {
   return std::make_unique<animator::Session>(model, "human48");
 }
 
-bool eventually(const std::function<bool()>& done) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
+using fixtures::eventually;
 
 class SessionRegistryTest : public ::testing::Test {
  protected:

@@ -16,6 +16,7 @@
 #include "sim/placement.hpp"
 #include "sim/props.hpp"
 #include "sim/world.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -102,10 +103,7 @@ TEST(DynamicPins, RigidlyHeldJointMovesLikeAFixedOne) {
   EXPECT_LT((ends[0] - ends[1]).norm(), 1e-9);
 }
 
-std::shared_ptr<const core::Model> human48() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
+using fixtures::human48;
 
 // human48 standing (sim::standing_configuration) in soft contact, its joints driven by the
 // dynamics-backed solver

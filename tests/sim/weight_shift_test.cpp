@@ -19,6 +19,7 @@
 #include "sim/placement.hpp"
 #include "sim/support_polygon.hpp"
 #include "sim/world.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -26,10 +27,7 @@ using core::Vector3;
 
 constexpr double kDragSeconds = 2.5;
 
-std::shared_ptr<const core::Model> human48() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
+using fixtures::human48;
 
 Eigen::VectorXd standing_pose(const core::Model& m) {
   return sim::standing_configuration(m, core::neutral_configuration(m), {});
@@ -237,7 +235,7 @@ TEST(WeightShift, WithoutBalanceFeedbackTheSameDragTipsTheFigure) {
 }
 
 // What 9 s of a drag the figure cannot follow standing (0.3 m down in 2.5 s) did.
-struct Fall {
+struct FallOutcome {
   double highest = 0;  // the centre of mass's greatest rise over its start (m)
   double deepest = 0;  // the lowest point of the figure (m, below the ground when negative)
   double work = 0;     // the work of the joints and, once fallen, the drag's spring: Σ h τ·v (J)
@@ -248,8 +246,8 @@ struct Fall {
 };
 
 // Every step is checked (step_checked: contacts push, the root rows hold) along the way.
-Fall tipping_drag(double depth) {
-  Fall out;
+FallOutcome tipping_drag(double depth) {
+  FallOutcome out;
   DynamicDrag f(depth);
   core::forward_kinematics(*f.model, f.data, f.q0);
   const double com0 = core::center_of_mass(*f.model, f.data).y();
@@ -288,7 +286,7 @@ constexpr double kTippingDepths[] = {0.3, 0.3 + 1e-9, 0.3 - 1e-6};
 // did), so its centre of mass never rises far above where it stood.
 TEST(WeightShift, ADragThatTipsTheFigureMakesItFallHonestly) {
   for (const double depth : kTippingDepths) {
-    const Fall fall = tipping_drag(depth);
+    const FallOutcome fall = tipping_drag(depth);
     ASSERT_FALSE(HasFatalFailure()) << "drag " << depth;
     EXPECT_LT(fall.surplus, 0.5) << "energy from nowhere, drag " << depth;
     EXPECT_GT(fall.deepest, -0.03) << "sinks through the ground, drag " << depth;
