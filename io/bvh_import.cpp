@@ -369,9 +369,7 @@ BvhTranslationJoints bvh_translation_joints(const Model& model, const BvhLayout&
   BvhTranslationJoints out;
   for (std::size_t k = 1; k < layout.joints.size(); ++k) {  // joints[0] is the ROOT
     const BvhLayout::Joint& j = layout.joints[k];
-    if (std::all_of(j.channels.begin(), j.channels.end(),
-                    [](BvhChannel c) { return is_rotation(c); }))
-      continue;
+    if (std::all_of(j.channels.begin(), j.channels.end(), is_rotation)) continue;
     const int link = model.link_index(j.name);
     if (link < 1) continue;
     (model.joint_type[link] == JointType::kFree ? out.translating : out.constant).push_back(j.name);

@@ -13,13 +13,11 @@
 #include "core/clip.hpp"
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace animator_test {
 
-inline std::shared_ptr<const core::Model> human() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
+inline std::shared_ptr<const core::Model> human() { return fixtures::human48(); }
 
 /// The message of the SessionError that reading the session file `j` throws ("" when none).
 inline std::string session_file_error(const nlohmann::json& j) {

@@ -15,6 +15,7 @@
 #include "core/swing_twist.hpp"
 #include "ik/solver.hpp"
 #include "io/bundled_characters.hpp"
+#include "tests/fixtures/fixtures.hpp"
 
 namespace {
 
@@ -92,10 +93,7 @@ struct Rig {
   Solver solver;
 };
 
-std::shared_ptr<const core::Model> human48() {
-  static const auto m = core::build_human_figure({});
-  return m;
-}
+using fixtures::human48;
 
 // runs a scenario twice and requires bit-identical configurations
 void expect_deterministic(const std::function<Eigen::VectorXd()>& scenario) {
