@@ -9,7 +9,7 @@
 import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
-import { openPage } from './support/browser.mjs';
+import { openPage, settle } from './support/browser.mjs';
 import { serverAndBrowser } from './support/fixture.mjs';
 import { dist, handle, serverSnapshot, waitForServer } from './support/session_page.mjs';
 
@@ -22,9 +22,26 @@ before(async () => ({ server, browser } = await fixture.start()));
 
 const session = (page) => page.evaluate(() => window.pindrag.session);
 
-/** Records about a second of a link (the right hand) moved with the mouse; it becomes the clip. */
-async function recordClip(page, link = 'r_hand', path = (k) => ({ dx: k, dy: -60 * Math.sin((Math.PI * k) / 6) })) {
+/**
+ * Records a link (the right hand) moved with the mouse; it becomes the clip. The gesture lasts at
+ * least a second and `moves` pointer moves, and goes on (up to 10 s) until the server has moved the
+ * link `minTravel` metres: a slow server still records a clip that moves. What the clip shows is
+ * checked by the tests; a server that does not follow the drag fails here, saying so.
+ */
+async function recordClip(page, link = 'r_hand', path = (k) => ({ dx: k, dy: -60 * Math.sin((Math.PI * k) / 6) }), { moves = 12, minTravel = 0.05 } = {}) {
   const from = await handle(page, link);
+  // the link's largest distance from where it started, kept by the page at every frame it draws
+  const watchTravel = (n) => {
+    const s = window.pindrag.linkPosition(n);
+    window.recordTravel = { travel: 0, on: true };
+    const watch = () => {
+      const p = window.pindrag.linkPosition(n);
+      window.recordTravel.travel = Math.max(window.recordTravel.travel, Math.hypot(p[0] - s[0], p[1] - s[1], p[2] - s[2]));
+      if (window.recordTravel.on) requestAnimationFrame(watch);
+    };
+    requestAnimationFrame(watch);
+  };
+  await page.evaluate(watchTravel, link);
   // (the record button blinks while recording: clicked without waiting for it to stand still)
   const toggleRecord = () => page.$eval('#tl-record', (b) => b.click());
   await toggleRecord();
@@ -32,16 +49,30 @@ async function recordClip(page, link = 'r_hand', path = (k) => ({ dx: k, dy: -60
   await page.mouse.move(from.x, from.y);
   await page.mouse.down();
   const start = Date.now();
-  for (let k = 1; Date.now() - start < 1000; k++) {
+  let travel = 0;
+  for (let k = 1; ; k++) {
     const { dx, dy } = path(k);
     await page.mouse.move(from.x + dx, from.y + dy);
     await page.waitForTimeout(30);
+    if (k < moves || Date.now() - start < 1000) continue;
+    travel = await page.evaluate(() => window.recordTravel.travel);
+    if (travel > minTravel || Date.now() - start > 10000) break;
   }
+  await page.evaluate(() => (window.recordTravel.on = false));
+  console.log(`recorded ${link}: ${(travel * 100).toFixed(1)} cm in ${Date.now() - start} ms`);
   await page.mouse.up();
   await page.waitForTimeout(150);
   await toggleRecord();
-  await page.waitForFunction(() => window.pindrag.session?.clip?.frames > 10, null, { timeout: 5000 });
+  await page.waitForFunction(() => window.pindrag.session?.recording === false && window.pindrag.session?.clip?.frames > 10, null, { timeout: 5000 });
+  assert.ok(travel > minTravel, `the server moved ${link} only ${(travel * 100).toFixed(1)} cm in 10 s of dragging it`);
   return session(page);
+}
+
+/** Clicks a timeline button that seeks, and waits until the page shows the pose of time `t`. */
+async function seek(page, button, t) {
+  const before = await page.evaluate(() => window.pindrag.lastPose?.frame ?? -1);
+  await page.click(button);
+  await page.waitForFunction(([f, time]) => window.pindrag.lastPose?.frame > f && Math.abs(window.pindrag.lastPose.time - time) < 1e-6, [before, t], { timeout: 5000 });
 }
 
 test('a grab held while a looping clip plays makes one layer, listed and managed in the panel', async () => {
@@ -58,9 +89,7 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
   // a pin on the right hand, which the clip moves; then play at 1x
   // (the pose can read time 0 before the seek: the seek's own pose is awaited, so the right click
   // lands on the hand where frame 0 places it)
-  const poseBefore = await page.evaluate(() => window.pindrag.lastPose?.frame ?? -1);
-  await page.click('#tl-first');
-  await page.waitForFunction((f) => window.pindrag.lastPose?.frame > f && window.pindrag.lastPose.time === 0, poseBefore, { timeout: 5000 });
+  await seek(page, '#tl-first', 0);
   const h = await handle(page, 'r_hand');
   await page.mouse.click(h.x, h.y, { button: 'right' });
   await page
@@ -73,10 +102,12 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
   await page.waitForFunction(() => window.pindrag.session?.playback?.playing === true);
 
   phase('playing');
-  // the pin marker is drawn on the hand at every frame shown
+  // the pin marker is drawn on the hand at every frame shown, sampled over a whole loop (a
+  // recording on a busy machine can start with a second in which the hand has not moved yet)
   let markerOff = 0;
   const markers = [];
-  for (let k = 0; k < 12; k++) {
+  const sampling = Date.now();
+  for (let k = 0; k < 12 || Date.now() - sampling < recorded.clip.duration * 1000 + 200; k++) {
     const { marker, hand } = await page.evaluate(() => ({ marker: window.pindrag.pinMarker('r_hand'), hand: window.pindrag.linkPosition('r_hand') }));
     markerOff = Math.max(markerOff, dist(marker, hand));
     markers.push(marker);
@@ -129,14 +160,14 @@ test('a grab held while a looping clip plays makes one layer, listed and managed
 
 test('"follow" keeps the camera on a travelling figure, and "slow while dragging" slows the clip for the gesture only', async () => {
   const { page, context, problems } = await openPage(browser, server.url);
-  await recordClip(page, 'pelvis', (k) => ({ dx: Math.min(6 * k, 120), dy: 0 })); // the root travels sideways
+  const recorded = await recordClip(page, 'pelvis', (k) => ({ dx: Math.min(6 * k, 120), dy: 0 }), { moves: 20 }); // the root travels sideways
   await page.click('#view-options label:has-text("follow") input');
-  await page.click('#tl-first');
-  await page.waitForTimeout(300);
+  await seek(page, '#tl-first', 0);
+  await settle(page);
   const camera0 = await page.evaluate(() => window.pindrag.camera());
   const root0 = await page.evaluate(() => window.pindrag.linkPosition('pelvis'));
-  await page.click('#tl-last');
-  await page.waitForTimeout(300);
+  await seek(page, '#tl-last', recorded.playback.duration);
+  await settle(page);
   const camera1 = await page.evaluate(() => window.pindrag.camera());
   const root1 = await page.evaluate(() => window.pindrag.linkPosition('pelvis'));
   const moved = Math.hypot(root1[0] - root0[0], root1[2] - root0[2]);
