@@ -10,15 +10,15 @@
 #include "core/human_figure.hpp"
 #include "io/urdf.hpp"
 
-#ifndef PINDRAG_BENCH_MODELS_DIR
-#define PINDRAG_BENCH_MODELS_DIR ""
-#endif
-
 namespace bench {
 
 std::string bench_models_dir() {
   namespace fs = std::filesystem;
+#ifdef PINDRAG_BENCH_MODELS_DIR
   std::string dir = PINDRAG_BENCH_MODELS_DIR;
+#else
+  std::string dir;
+#endif
   if (const char* e = std::getenv("PINDRAG_BENCH_MODELS_DIR"); e && *e) dir = e;
   return !dir.empty() && fs::is_directory(dir) ? dir : std::string();
 }

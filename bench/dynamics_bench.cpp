@@ -44,7 +44,7 @@ struct States {
   }
 };
 
-void rnea(benchmark::State& state, const BenchModel& bm) {
+void time_rnea(benchmark::State& state, const BenchModel& bm) {
   const core::Model& m = *bm.model;
   core::Data data(m);
   const States s(m);
@@ -55,7 +55,7 @@ void rnea(benchmark::State& state, const BenchModel& bm) {
   }
 }
 
-void crba(benchmark::State& state, const BenchModel& bm) {
+void time_crba(benchmark::State& state, const BenchModel& bm) {
   const core::Model& m = *bm.model;
   core::Data data(m);
   const States s(m);
@@ -63,7 +63,7 @@ void crba(benchmark::State& state, const BenchModel& bm) {
   for (auto _ : state) benchmark::DoNotOptimize(core::crba(m, data, s.q[k++ % kStates]).data());
 }
 
-void aba(benchmark::State& state, const BenchModel& bm) {
+void time_aba(benchmark::State& state, const BenchModel& bm) {
   const core::Model& m = *bm.model;
   core::Data data(m);
   const States s(m);
@@ -303,9 +303,9 @@ void crba_kdl(benchmark::State& state, const BenchModel& bm) {
 const bool registered = [] {
   for (const BenchModel& bm : bench::models()) {
     const std::string n = "/" + bm.name;
-    benchmark::RegisterBenchmark(("BM_Rnea" + n).c_str(), rnea, bm);
-    benchmark::RegisterBenchmark(("BM_Crba" + n).c_str(), crba, bm);
-    benchmark::RegisterBenchmark(("BM_Aba" + n).c_str(), aba, bm);
+    benchmark::RegisterBenchmark(("BM_Rnea" + n).c_str(), time_rnea, bm);
+    benchmark::RegisterBenchmark(("BM_Crba" + n).c_str(), time_crba, bm);
+    benchmark::RegisterBenchmark(("BM_Aba" + n).c_str(), time_aba, bm);
     benchmark::RegisterBenchmark(("BM_CrbaLtdl" + n).c_str(), crba_ltdl, bm);
     benchmark::RegisterBenchmark(("BM_Osim" + n).c_str(), osim, bm);
     if (!bm.mujoco_xml.empty()) {

@@ -113,7 +113,7 @@ void check_geometry(const std::string& link,
   }
 }
 
-void check_range(const std::string& joint, const SphericalRange& r, Checker& c) {
+void check_spherical_range(const std::string& joint, const SphericalRange& r, Checker& c) {
   if (std::abs(r.frame.norm() - 1.0) > 1e-6 || !finite(r.frame.coeffs())) {
     c.joint(joint, "range frame is not a unit quaternion");
   }
@@ -181,7 +181,7 @@ void check_joint(const LinkSpec& l, const std::string& jname, bool is_root, Chec
     }
   }
   if (j.type == JointType::kSpherical) {
-    check_range(jname, j.range, c);
+    check_spherical_range(jname, j.range, c);
     const Quaternion& s = j.standard_orientation;
     if (!finite(s.coeffs()) || std::abs(s.norm() - 1.0) > 1e-6) {
       c.joint(jname, "standard orientation is not a unit quaternion");

@@ -12,6 +12,8 @@
 
 namespace io {
 
+using namespace core;  // io reads and writes core's types
+
 namespace {
 
 using bvh_detail::num;

@@ -24,7 +24,7 @@ using bvh_detail::num;
 // mass without inertia
 constexpr double kNoExtent = 1e-6;
 
-[[noreturn]] void fail(const std::string& source, const std::string& what) {
+[[noreturn]] void fail_import(const std::string& source, const std::string& what) {
   throw ModelError({source + ": " + what});
 }
 
@@ -192,10 +192,11 @@ JointOrigins joint_origins(const BvhDocument& doc,
       const int link = joint_types_of->link_index(link_name[candidates[k]]);
       if (link > 0 && joint_types_of->joint_type[link] == JointType::kFree) continue;
       if (link > 0 && !constant) {
-        fail(source_name, "joint \"" + doc.nodes[candidates[k]].name +
-                              "\" translates in this clip, but the character it is loaded onto "
-                              "has it rotational (rule: a joint's position channels may move only "
-                              "where the character's joint is free)");
+        fail_import(source_name,
+                    "joint \"" + doc.nodes[candidates[k]].name +
+                        "\" translates in this clip, but the character it is loaded onto "
+                        "has it rotational (rule: a joint's position channels may move only "
+                        "where the character's joint is free)");
       }
     }
     if (!constant) continue;
@@ -380,17 +381,18 @@ BvhTranslationJoints bvh_translation_joints(const Model& model, const BvhLayout&
 BvhImport import_bvh(const BvhDocument& doc,
                      const std::string& source_name,
                      const BvhImportOptions& options) {
-  if (doc.nodes.empty()) fail(source_name, "the hierarchy has no joints");
+  if (doc.nodes.empty()) fail_import(source_name, "the hierarchy has no joints");
   if (!std::isfinite(options.total_mass) || options.total_mass <= 0) {
-    fail(source_name, "total mass " + num(options.total_mass) + " is not a positive finite number");
+    fail_import(source_name,
+                "total mass " + num(options.total_mass) + " is not a positive finite number");
   }
   BvhImport out;
   double s = 1.0;
   if (options.scale) {
     s = *options.scale;
     if (!std::isfinite(s) || s <= 0) {
-      fail(source_name,
-           "scale " + num(s) + " is not a positive finite number (metres per file unit)");
+      fail_import(source_name,
+                  "scale " + num(s) + " is not a positive finite number (metres per file unit)");
     }
     out.unit = "option";
   } else {
@@ -417,8 +419,8 @@ BvhImport load_bvh_string(std::string_view text,
                           const std::string& source_name,
                           const BvhImportOptions& options) {
   if (text.size() > kMaxBvhBytes) {
-    fail(source_name, std::to_string(text.size()) + " bytes (rule: at most " +
-                          std::to_string(kMaxBvhBytes) + " bytes, kMaxBvhBytes)");
+    fail_import(source_name, std::to_string(text.size()) + " bytes (rule: at most " +
+                                 std::to_string(kMaxBvhBytes) + " bytes, kMaxBvhBytes)");
   }
   return import_bvh(parse_bvh(text, source_name, options.budget), source_name, options);
 }

@@ -276,7 +276,7 @@ class Reader {
         return;
       }
     }
-    fail("POINT:UNITS is " + show(t.units) + " (rule: mm, cm or m)");
+    fail("POINT:UNITS is " + shown_text(t.units) + " (rule: mm, cm or m)");
   }
 
   std::size_t word_bytes() const { return scale_ < 0 ? 4 : 2; }
@@ -339,7 +339,7 @@ class Reader {
   std::string where(const C3dTrial& t, int frame, int point) const {
     return "data: frame " + std::to_string(frame) + " (file frame " +
            std::to_string(static_cast<std::int64_t>(t.first_frame) + frame) + "), point " +
-           std::to_string(point) + " " + show(t.labels[point]);
+           std::to_string(point) + " " + shown_text(t.labels[point]);
   }
 
   // `Male:LFHD`, `Male:RFHD`, ...: a prefix every label shares becomes the subject

@@ -24,7 +24,7 @@ enum class Processor : std::uint8_t { kIntel = 84, kDec = 85, kMips = 86 };
 [[noreturn]] void fail(const std::string& source, const std::string& what);
 
 /// File text fit for a message: quoted, control and non-ASCII bytes as '?', at most 40 bytes.
-std::string show(std::string_view text);
+std::string shown_text(std::string_view text);
 
 /// A number for a message: up to 9 significant digits, no trailing zeros ("0", "120", "NaN").
 std::string number_text(double v);

@@ -26,7 +26,7 @@ std::string name_of(std::string_view s) {
 }
 
 int s8(std::string_view bytes, std::size_t at) { return static_cast<std::int8_t>(bytes[at]); }
-int u8(std::string_view bytes, std::size_t at) { return static_cast<std::uint8_t>(bytes[at]); }
+int byte_at(std::string_view bytes, std::size_t at) { return static_cast<std::uint8_t>(bytes[at]); }
 
 std::string trim_right(std::string_view s) {
   std::size_t n = s.size();
@@ -61,7 +61,8 @@ class Walker {
       if (link + 2 > end_) fail_at("the record's name runs past the end of the section");
       const std::string name = name_of(file_.substr(at_ + 2, n));
       if (id == 0) {
-        fail(source_, "parameter section: byte " + std::to_string(at_) + ": record " + show(name) +
+        fail(source_, "parameter section: byte " + std::to_string(at_) + ": record " +
+                          shown_text(name) +
                           " has id 0 (rule: a group's id is -1 to -127, a parameter's 1 to 127)");
       }
       const int offset = i16(file_, link);
@@ -93,7 +94,7 @@ class Walker {
   std::string label(int id, const std::string& name) const {
     const auto g = groups_.find(id);
     if (g != groups_.end()) return g->second + ":" + name;
-    return "parameter " + show(name) + " of group " + std::to_string(id);
+    return "parameter " + shown_text(name) + " of group " + std::to_string(id);
   }
 
   std::size_t group(int id, const std::string& name, std::size_t after_link) {
@@ -117,7 +118,7 @@ class Walker {
       fail(source_, what + ": " + std::to_string(ndims) + " dimensions (rule: 0 to 7)");
     }
     if (at + 2 + ndims > end_) fail(source_, what + ": its dimensions run past the section");
-    for (int d = 0; d < ndims; ++d) p.dims.push_back(u8(file_, at + 2 + d));
+    for (int d = 0; d < ndims; ++d) p.dims.push_back(byte_at(file_, at + 2 + d));
     // at most 255^7 × 4 bytes: no overflow in 64 bits
     const std::uint64_t bytes = static_cast<std::uint64_t>(std::abs(p.type)) * p.elements();
     const std::size_t data = at + 2 + ndims;
@@ -136,10 +137,10 @@ class Walker {
   void next(std::size_t link, int offset, std::size_t used, const std::string& name) {
     const auto target = static_cast<std::int64_t>(link) + offset;
     if (target < static_cast<std::int64_t>(used) || target > static_cast<std::int64_t>(end_)) {
-      fail(source_, "parameter section: record " + show(name) + " at byte " + std::to_string(at_) +
-                        ": its next-record offset " + std::to_string(offset) + " points to byte " +
-                        std::to_string(target) + ", outside bytes " + std::to_string(used) +
-                        " to " + std::to_string(end_) +
+      fail(source_, "parameter section: record " + shown_text(name) + " at byte " +
+                        std::to_string(at_) + ": its next-record offset " + std::to_string(offset) +
+                        " points to byte " + std::to_string(target) + ", outside bytes " +
+                        std::to_string(used) + " to " + std::to_string(end_) +
                         " (rule: the chain moves forward past each record and stays inside the " +
                         "parameter blocks)");
     }
@@ -160,7 +161,7 @@ void fail(const std::string& source, const std::string& what) {
   throw C3dError(source + ": " + what);
 }
 
-std::string show(std::string_view text) {
+std::string shown_text(std::string_view text) {
   constexpr std::size_t kMaxShown = 40;
   std::string out = "'";
   for (std::size_t i = 0; i < text.size() && i < kMaxShown; ++i) {
@@ -218,8 +219,8 @@ Parameters::Parameters(std::string_view file, std::size_t block, const std::stri
     : source_(source), first_block_(block) {
   // the section's own header: two reserved bytes, its block count, the processor type
   const std::size_t begin = (block - 1) * kBlockBytes;
-  block_count_ = u8(file, begin + 2);
-  const int processor = u8(file, begin + 3);
+  block_count_ = byte_at(file, begin + 2);
+  const int processor = byte_at(file, begin + 3);
   if (processor == static_cast<int>(Processor::kMips)) {
     fail(source_, "parameter section: processor type 86 (MIPS, big-endian) is not supported " +
                       std::string("(rule: pindrag reads Intel (84) and DEC (85) files)"));
@@ -263,7 +264,7 @@ const Parameter& Parameters::numeric(const Parameter& p) const {
 double Parameters::element(const Parameter& p, std::size_t i) const {
   switch (p.type) {
     case 1:
-      return u8(p.data, i);
+      return byte_at(p.data, i);
     case 2:
       return i16(p.data, 2 * i);
     default:

@@ -133,7 +133,7 @@ void normalized_influences(const std::array<int, 4>& joints,
   w_out[largest] = static_cast<float>(rest);
 }
 
-void append_box(
+void append_stick_box(
     const Transform& X, const Vector3& a, const Vector3& b, double r, int joint, MeshArrays& out) {
   Vector3 d = b - a;
   const double len = d.norm();
@@ -172,9 +172,10 @@ void append_box(
 
 void append_link_sticks(
     const Model& model, int i, const Transform& X_bind, double r, MeshArrays& out) {
-  append_box(X_bind, Vector3::Zero(), Vector3::Zero(), 1.5 * r, i - 1, out);
+  append_stick_box(X_bind, Vector3::Zero(), Vector3::Zero(), 1.5 * r, i - 1, out);
   for (int c = i + 1; c < model.subtree_end[i]; ++c) {
-    if (model.parent[c] == i) append_box(X_bind, Vector3::Zero(), model.X_PJ[c].p, r, i - 1, out);
+    if (model.parent[c] == i)
+      append_stick_box(X_bind, Vector3::Zero(), model.X_PJ[c].p, r, i - 1, out);
   }
 }
 

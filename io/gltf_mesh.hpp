@@ -45,7 +45,7 @@ struct MeshArrays {
 
 /// One box from a to b with half width r (a == b: a cube of half size r at a), its vertices
 /// placed by X and skinned rigidly to skin joint `joint`; flat faces, four vertices each.
-void append_box(
+void append_stick_box(
     const Transform& X, const Vector3& a, const Vector3& b, double r, int joint, MeshArrays& out);
 
 /// The stick figure of link i (a cube of half size 1.5 r on its origin, a box of half width r to

@@ -13,7 +13,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string shown(const std::string& pointer) {
+std::string shown_pointer(const std::string& pointer) {
   return pointer.empty() ? "document root" : pointer;
 }
 
@@ -30,10 +30,10 @@ std::string where(JsonParseError::Kind kind,
     case Kind::kSyntax:
       return position;
     case Kind::kDepth:
-      return position + shown(pointer) + ": ";
+      return position + shown_pointer(pointer) + ": ";
     case Kind::kValues:
     case Kind::kDuplicateKey:
-      return shown(pointer) + ": ";
+      return shown_pointer(pointer) + ": ";
   }
   return "";
 }

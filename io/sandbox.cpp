@@ -276,3 +276,5 @@ SandboxResult run_sandboxed(const std::function<int(int fd)>& work, const Sandbo
 }
 
 }  // namespace io
+
+#undef PINDRAG_ASAN  // a batch build compiles the next file in this unit

@@ -13,7 +13,7 @@ namespace {
 using animator::Session;
 using animator::SessionError;
 
-core::Vector3 vec3(const Position& p) { return {p[0], p[1], p[2]}; }
+core::Vector3 to_vector3(const Position& p) { return {p[0], p[1], p[2]}; }
 
 std::optional<core::Quaternion> rotation(const std::optional<Rotation>& r) {
   if (!r) return std::nullopt;
@@ -32,16 +32,16 @@ int link_index(const Session& s, const std::string& name) {
 void run(Session&, const Hello&) {}
 
 void run(Session& s, const DragBegin& m) {
-  s.drag_begin(link_index(s, m.link), vec3(m.target), vec3(m.point));
+  s.drag_begin(link_index(s, m.link), to_vector3(m.target), to_vector3(m.point));
 }
 
-void run(Session& s, const DragMove& m) { s.drag_move(vec3(m.target), rotation(m.rotation)); }
+void run(Session& s, const DragMove& m) { s.drag_move(to_vector3(m.target), rotation(m.rotation)); }
 void run(Session& s, const DragEnd&) { s.drag_end(); }
-void run(Session& s, const Pin& m) { s.pin(link_index(s, m.link), m.mode, vec3(m.point)); }
+void run(Session& s, const Pin& m) { s.pin(link_index(s, m.link), m.mode, to_vector3(m.point)); }
 void run(Session& s, const Unpin& m) { s.unpin(link_index(s, m.link)); }
 
 void run(Session& s, const MovePin& m) {
-  s.move_pin(link_index(s, m.link), vec3(m.target), rotation(m.rotation));
+  s.move_pin(link_index(s, m.link), to_vector3(m.target), rotation(m.rotation));
 }
 
 void run(Session& s, const SetSettings& m) {

@@ -106,7 +106,7 @@ std::string encode_mesh_binary(const core::SkinnedMesh& mesh) {
 
 namespace {
 
-[[noreturn]] void refuse(const std::string& source, const std::string& what) {
+[[noreturn]] void refuse_mesh(const std::string& source, const std::string& what) {
   throw std::runtime_error(source + ": " + what);
 }
 
@@ -120,8 +120,8 @@ class Reader {
   std::vector<T> take(std::size_t count, const char* field) {
     const std::size_t size = sizeof(T) * count;
     if (count > bytes_.size() / sizeof(T) || size > bytes_.size() - at_) {
-      refuse(source_, std::string(field) + ": " + std::to_string(count) +
-                          " values run past the end of the file (rule: the header's counts)");
+      refuse_mesh(source_, std::string(field) + ": " + std::to_string(count) +
+                               " values run past the end of the file (rule: the header's counts)");
     }
     std::vector<T> out(count);
     if (size) std::memcpy(out.data(), bytes_.data() + at_, size);
@@ -139,14 +139,14 @@ class Reader {
 template <typename T>
 void check_finite(const std::vector<T>& values, const std::string& source, const char* field) {
   for (T v : values) {
-    if (!std::isfinite(v)) refuse(source, std::string(field) + ": a value is not finite");
+    if (!std::isfinite(v)) refuse_mesh(source, std::string(field) + ": a value is not finite");
   }
 }
 
 // a number the header gives as an unsigned integer that fits an int
 int small_count(const nlohmann::json& j, const std::string& source, const std::string& field) {
   if (!j.is_number_unsigned() || j.get<std::uint64_t>() > std::numeric_limits<int>::max()) {
-    refuse(source, field + ": not a count (rule: an integer from 0 to 2^31 - 1)");
+    refuse_mesh(source, field + ": not a count (rule: an integer from 0 to 2^31 - 1)");
   }
   return j.get<int>();
 }
@@ -158,34 +158,35 @@ void read_materials(const nlohmann::json& h,
                     const std::string& source,
                     core::SkinnedMesh& mesh) {
   const std::size_t n = mesh.positions.size();
-  if (h.contains("uvs") && !h["uvs"].is_boolean()) refuse(source, "uvs: not a bool");
+  if (h.contains("uvs") && !h["uvs"].is_boolean()) refuse_mesh(source, "uvs: not a bool");
   for (const char* field : {"parts", "textures"}) {
     if (h.contains(field) && !h[field].is_array()) {
-      refuse(source, std::string(field) + ": not an array");
+      refuse_mesh(source, std::string(field) + ": not an array");
     }
   }
   if (h.value("parts", nlohmann::json::array()).size() > mesh.triangles.size() ||
       h.value("textures", nlohmann::json::array()).size() > in.bytes_left()) {
-    refuse(source, "parts, textures: more than the mesh can hold");
+    refuse_mesh(source, "parts, textures: more than the mesh can hold");
   }
   for (const auto& p : h.value("parts", nlohmann::json::array())) {
     const std::string at = "parts[" + std::to_string(mesh.parts.size()) + "]";
     if (!p.is_object() || !p.contains("first") || !p.contains("count")) {
-      refuse(source, at + ": not an object with first and count");
+      refuse_mesh(source, at + ": not an object with first and count");
     }
     core::MeshPart part;
     part.first_triangle = small_count(p["first"], source, at + ".first");
     part.triangle_count = small_count(p["count"], source, at + ".count");
     const nlohmann::json color = p.value("base_color", nlohmann::json());
-    if (!color.is_array() || color.size() != 4) refuse(source, at + ".base_color: not 4 numbers");
+    if (!color.is_array() || color.size() != 4)
+      refuse_mesh(source, at + ".base_color: not 4 numbers");
     for (int k = 0; k < 4; ++k) {
-      if (!color[k].is_number()) refuse(source, at + ".base_color: not 4 numbers");
+      if (!color[k].is_number()) refuse_mesh(source, at + ".base_color: not 4 numbers");
       part.base_color[k] = color[k].get<float>();
     }
     const nlohmann::json texture = p.value("texture", nlohmann::json(-1));
     if (!texture.is_number_integer() || texture.get<long long>() < -1 ||
         texture.get<long long>() > std::numeric_limits<int>::max()) {
-      refuse(source, at + ".texture: not a texture index or -1");
+      refuse_mesh(source, at + ".texture: not a texture index or -1");
     }
     part.texture = texture.get<int>();
     mesh.parts.push_back(part);
@@ -199,13 +200,13 @@ void read_materials(const nlohmann::json& h,
     const std::string at = "textures[" + std::to_string(mesh.textures.size()) + "]";
     if (!t.is_object() || !t.contains("mime_type") || !t["mime_type"].is_string() ||
         !t.contains("bytes") || !t["bytes"].is_number_unsigned()) {
-      refuse(source, at + ": not an object with mime_type and bytes");
+      refuse_mesh(source, at + ": not an object with mime_type and bytes");
     }
     const std::vector<char> image = in.take<char>(t["bytes"].get<std::size_t>(), "textures");
     mesh.textures.push_back({t["mime_type"].get<std::string>(), {image.begin(), image.end()}});
   }
   const std::string e = core::check_mesh_materials(mesh);
-  if (!e.empty()) refuse(source, e);
+  if (!e.empty()) refuse_mesh(source, e);
 }
 
 }  // namespace
@@ -214,42 +215,44 @@ core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
                                      int nlinks,
                                      const std::string& source) {
   if (bytes.size() < 8 || bytes.compare(0, 4, "PDMS") != 0) {
-    refuse(source, "not a pindrag mesh (rule: it starts with PDMS and a header length)");
+    refuse_mesh(source, "not a pindrag mesh (rule: it starts with PDMS and a header length)");
   }
   std::uint32_t length = 0;
   std::memcpy(&length, bytes.data() + 4, 4);
-  if (length > bytes.size() - 8) refuse(source, "header: longer than the file");
+  if (length > bytes.size() - 8) refuse_mesh(source, "header: longer than the file");
   const nlohmann::json h = nlohmann::json::parse(bytes.substr(8, length), nullptr, false);
-  if (h.is_discarded() || !h.is_object()) refuse(source, "header: not a JSON object");
+  if (h.is_discarded() || !h.is_object()) refuse_mesh(source, "header: not a JSON object");
   const auto count = [&](const char* field) -> std::size_t {
     const auto it = h.find(field);
     if (it == h.end() || !it->is_number_unsigned()) {
-      refuse(source, std::string(field) + ": a count (rule: a non-negative integer)");
+      refuse_mesh(source, std::string(field) + ": a count (rule: a non-negative integer)");
     }
     return it->get<std::size_t>();
   };
   const std::size_t n = count("vertices"), t = count("triangles");
-  if (!h.contains("normals") || !h["normals"].is_boolean()) refuse(source, "normals: not a bool");
-  if (!h.contains("bones") || !h["bones"].is_array()) refuse(source, "bones: not an array");
+  if (!h.contains("normals") || !h["normals"].is_boolean())
+    refuse_mesh(source, "normals: not a bool");
+  if (!h.contains("bones") || !h["bones"].is_array()) refuse_mesh(source, "bones: not an array");
   if (!h.contains("inverse_bind") || !h["inverse_bind"].is_array() ||
       h["inverse_bind"].size() != h["bones"].size()) {
-    refuse(source, "inverse_bind: not one matrix per bone");
+    refuse_mesh(source, "inverse_bind: not one matrix per bone");
   }
   core::SkinnedMesh mesh;
   if (h.contains("name") && h["name"].is_string()) mesh.name = h["name"];
   for (const auto& b : h["bones"]) {
     if (!b.is_number_integer() || b.get<long long>() < 0 || b.get<long long>() + 1 >= nlinks) {
-      refuse(source, "bones: a link index outside the character (rule: 0 to " +
-                         std::to_string(nlinks - 2) + ")");
+      refuse_mesh(source, "bones: a link index outside the character (rule: 0 to " +
+                              std::to_string(nlinks - 2) + ")");
     }
     mesh.bones.push_back(b.get<int>() + 1);
   }
   for (const auto& m : h["inverse_bind"]) {
-    if (!m.is_array() || m.size() != 16) refuse(source, "inverse_bind: a matrix of 16 numbers");
+    if (!m.is_array() || m.size() != 16)
+      refuse_mesh(source, "inverse_bind: a matrix of 16 numbers");
     double a[16];
     for (int k = 0; k < 16; ++k) {
       if (!m[k].is_number() || !std::isfinite(m[k].get<double>())) {
-        refuse(source, "inverse_bind: a value is not a finite number");
+        refuse_mesh(source, "inverse_bind: a value is not a finite number");
       }
       a[k] = m[k].get<double>();
     }
@@ -282,7 +285,8 @@ core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
   for (std::size_t k = 0; k < t; ++k) {
     std::array<int, 3> tri;
     for (int c = 0; c < 3; ++c) {
-      if (indices[3 * k + c] >= n) refuse(source, "indices: a vertex index beyond the vertices");
+      if (indices[3 * k + c] >= n)
+        refuse_mesh(source, "indices: a vertex index beyond the vertices");
       tri[c] = static_cast<int>(indices[3 * k + c]);
     }
     mesh.triangles.push_back(tri);
@@ -297,7 +301,7 @@ core::SkinnedMesh decode_mesh_binary(const std::string& bytes,
       j[c] = joints[4 * v + c];
       w[c] = weights[4 * v + c];
       if (static_cast<std::size_t>(j[c]) >= mesh.bones.size()) {
-        if (w[c] != 0) refuse(source, "joints: a bone index beyond the bones");
+        if (w[c] != 0) refuse_mesh(source, "joints: a bone index beyond the bones");
         j[c] = 0;  // an unused slot
       }
     }

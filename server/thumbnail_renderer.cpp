@@ -525,3 +525,5 @@ void release_thumbnail_renderer() {
 }
 
 }  // namespace server
+
+#undef GL_GLEXT_PROTOTYPES  // a batch build compiles the next file in this unit

@@ -26,7 +26,7 @@ struct PlaneAxes {
   Vector3 lift(const Point& p) const { return origin + p.x() * u + p.y() * w; }
 };
 
-double cross(const Point& o, const Point& a, const Point& b) {
+double cross_z(const Point& o, const Point& a, const Point& b) {
   const Point oa = a - o, ob = b - o;
   return oa.x() * ob.y() - oa.y() * ob.x();
 }
@@ -43,11 +43,11 @@ std::vector<Point> hull(std::vector<Point> p) {
   std::vector<Point> h(2 * p.size());
   std::size_t k = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {  // lower chain
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= kSame * kSame) --k;
+    while (k >= 2 && cross_z(h[k - 2], h[k - 1], p[i]) <= kSame * kSame) --k;
     h[k++] = p[i];
   }
   for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
-    while (k >= lower && cross(h[k - 2], h[k - 1], p[i]) <= kSame * kSame) --k;
+    while (k >= lower && cross_z(h[k - 2], h[k - 1], p[i]) <= kSame * kSame) --k;
     h[k++] = p[i];
   }
   h.resize(k - 1);  // the last point is the first
@@ -84,7 +84,7 @@ Vector3 polygon_centroid(const std::vector<Vector3>& polygon, const GroundPlane&
   Point moment = Point::Zero();
   for (std::size_t i = 0; i < polygon.size(); ++i) {
     const Point a = axes.flat(polygon[i]), b = axes.flat(polygon[(i + 1) % polygon.size()]);
-    const double t = 0.5 * cross(mean, a, b);
+    const double t = 0.5 * cross_z(mean, a, b);
     area += t;
     moment += t * (mean + a + b) / 3.0;
   }
@@ -106,7 +106,7 @@ Vector3 clamp_toward(const std::vector<Vector3>& polygon,
     const Point a = axes.flat(polygon[i]), b = axes.flat(polygon[(i + 1) % polygon.size()]);
     const double length = (b - a).norm();
     if (!(length > 0)) continue;
-    const double at_centre = cross(a, b, c) / length - margin;
+    const double at_centre = cross_z(a, b, c) / length - margin;
     if (at_centre < 0) return axes.lift(c);  // the centre itself is not that far inside
     const double rate = ((b - a).x() * d.y() - (b - a).y() * d.x()) / length;
     if (rate < 0) t = std::min(t, at_centre / -rate);
@@ -129,7 +129,7 @@ bool inside_polygon(const std::vector<Vector3>& polygon,
   for (std::size_t i = 0; i < n; ++i) {
     const Point a = axes.flat(polygon[i]), b = axes.flat(polygon[(i + 1) % n]);
     // signed distance of p to the left of edge a→b (inside is to the left)
-    if (cross(a, b, p) / (b - a).norm() < -tolerance) return false;
+    if (cross_z(a, b, p) / (b - a).norm() < -tolerance) return false;
   }
   return true;
 }

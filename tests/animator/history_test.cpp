@@ -18,7 +18,7 @@ using animator_test::position;
 using animator_test::run;
 using animator_test::swinging_clip;
 
-std::string state(const Session& s) {
+std::string serialized_state(const Session& s) {
   return session_to_json(s, /*include_character=*/false).dump();
 }
 
@@ -76,12 +76,12 @@ TEST(History, ThreeThousandKeysAndManyEditsStayUnderTheUndoBudget) {
   EXPECT_GT(s.history().dropped(), 0u);
   EXPECT_GT(s.history().size(), 1000u);  // differences are small: many entries fit
   // everything kept undoes and redoes exactly
-  const std::string last = state(s);
+  const std::string last = serialized_state(s);
   const std::size_t entries = s.history().size();
   for (std::size_t k = 0; k < entries; ++k) ASSERT_TRUE(s.undo());
   EXPECT_FALSE(s.undo());
   for (std::size_t k = 0; k < entries; ++k) ASSERT_TRUE(s.redo());
-  EXPECT_EQ(state(s), last);
+  EXPECT_EQ(serialized_state(s), last);
 }
 
 TEST(History, OverTheBudgetTheOldestGoFirstAndTheNewestIsKept) {

@@ -26,7 +26,7 @@ s::Position position_of(const Session& session, const std::string& link) {
 }
 
 // The message of the ProtocolError that applying `m` throws ("" when it applies).
-std::string refusal(Session& session, const s::ClientMessage& m) {
+std::string apply_refusal(Session& session, const s::ClientMessage& m) {
   try {
     s::apply(session, m);
   } catch (const s::ProtocolError& e) {
@@ -124,7 +124,7 @@ TEST(ApplyMessage, LayersAreMutedReweightedAndRemoved) {
   EXPECT_EQ(session.layers()[0]->weight, 0.5);
   s::apply(session, s::Layer{.index = 0, .remove = true});
   EXPECT_TRUE(session.layers().empty());
-  EXPECT_EQ(refusal(session, s::Layer{.index = 0}),
+  EXPECT_EQ(apply_refusal(session, s::Layer{.index = 0}),
             "layer.muted: one of muted, weight or remove is required");
 }
 
@@ -157,17 +157,17 @@ TEST(ApplyMessage, SessionErrorsComeBackNamedByTypeAndField) {
   };
   const json before = animator::session_to_json(session);
   for (const auto& [message, expected] : cases) {
-    EXPECT_EQ(refusal(session, message).rfind(expected, 0), 0u)
-        << s::message_type(message) << ": " << refusal(session, message);
+    EXPECT_EQ(apply_refusal(session, message).rfind(expected, 0), 0u)
+        << s::message_type(message) << ": " << apply_refusal(session, message);
   }
   EXPECT_EQ(animator::session_to_json(session), before);
   EXPECT_EQ(session.history().size(), 0u);
 
   // with a key and a drag in progress, the rate and the rotation are at fault
   s::apply(session, s::KeyInsert{.time = 0});
-  EXPECT_EQ(refusal(session, s::BakeKeys{.rate = 0}), "bake_keys.rate: must be in (0, 1000]");
+  EXPECT_EQ(apply_refusal(session, s::BakeKeys{.rate = 0}), "bake_keys.rate: must be in (0, 1000]");
   s::apply(session, s::DragBegin{.link = "r_hand", .target = position_of(session, "r_hand")});
-  EXPECT_EQ(refusal(session, s::DragMove{.seq = 2, .rotation = s::Rotation{kNaN, 0, 0, 0}}),
+  EXPECT_EQ(apply_refusal(session, s::DragMove{.seq = 2, .rotation = s::Rotation{kNaN, 0, 0, 0}}),
             "drag_move.rotation: must be a unit quaternion [w, x, y, z]");
 }
 

@@ -100,11 +100,6 @@ int differing_pixels(const Image& a, const Image& b) {
   return n;
 }
 
-const std::shared_ptr<const core::Model>& human48() {
-  static const auto model = core::build_human_figure({});
-  return model;
-}
-
 server::ThumbnailOptions plain(int size) {
   server::ThumbnailOptions o;
   o.size = size;
@@ -124,7 +119,7 @@ Eigen::VectorXd arm_raised(const core::Model& m) {
 }
 
 TEST(Thumbnail, PngDecodesToTheRequestedSize) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   for (int size : {server::kThumbnailMinSize, 64, 200, 256}) {
     server::ThumbnailOptions o;
     o.size = size;
@@ -139,7 +134,7 @@ TEST(Thumbnail, PngDecodesToTheRequestedSize) {
 }
 
 TEST(Thumbnail, FigureIsCentredAndFillsAboutEightyPercentOfTheHeight) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const auto o = plain(256);
   const Bytes png = server::render_thumbnail(m, core::neutral_configuration(m), o);
   keep(png, "human48_plain");
@@ -170,7 +165,7 @@ TEST(Thumbnail, FigureIsCentredAndFillsAboutEightyPercentOfTheHeight) {
 
 TEST(Thumbnail, LeftSideIsCoolAndRightSideWarm) {
   // seen from the front, the figure's left (+X) is on the image's right
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const Image im = decode(server::render_thumbnail(m, core::neutral_configuration(m), plain(256)));
   double cool_x = 0, warm_x = 0;
   int cool = 0, warm = 0;
@@ -186,7 +181,7 @@ TEST(Thumbnail, LeftSideIsCoolAndRightSideWarm) {
 }
 
 TEST(Thumbnail, DifferentPosesGiveDifferentImagesAndEqualInputsEqualBytes) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const auto o = plain(128);
   const Bytes neutral = server::render_thumbnail(m, core::neutral_configuration(m), o);
   const Bytes raised = server::render_thumbnail(m, arm_raised(m), o);
@@ -201,7 +196,7 @@ TEST(Thumbnail, DifferentPosesGiveDifferentImagesAndEqualInputsEqualBytes) {
 }
 
 TEST(Thumbnail, QuaternionsAreRenormalized) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const Eigen::VectorXd q = arm_raised(m);
   Eigen::VectorXd scaled = q;
   const int at = m.idx_q[m.joint_index("l_shoulder")];
@@ -212,7 +207,7 @@ TEST(Thumbnail, QuaternionsAreRenormalized) {
 }
 
 TEST(Thumbnail, GroundModes) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const Eigen::VectorXd q = core::neutral_configuration(m);
   server::ThumbnailOptions o;
   o.size = 128;
@@ -236,7 +231,7 @@ TEST(Thumbnail, GroundModes) {
 }
 
 TEST(Thumbnail, BackgroundColourIsUsed) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   auto o = plain(64);
   o.background = {0x10, 0x20, 0x30};
   const Image im = decode(server::render_thumbnail(m, core::neutral_configuration(m), o));
@@ -311,7 +306,7 @@ void expect_invalid(F&& f, const std::string& field) {
 }
 
 TEST(Thumbnail, BadInputNamesItsField) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const Eigen::VectorXd q = core::neutral_configuration(m);
   for (int size : {0, server::kThumbnailMinSize - 1, server::kThumbnailMaxSize + 1, -5}) {
     server::ThumbnailOptions o;
@@ -351,7 +346,7 @@ TEST(Thumbnail, BadInputNamesItsField) {
 }
 
 TEST(ThumbnailCache, HitsEvictionsAndTheByteCap) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const auto neutral = core::neutral_configuration(m), raised = arm_raised(m);
   server::ThumbnailCache cache;
   auto o = plain(64);
@@ -426,7 +421,7 @@ TEST(ThumbnailCache, ReplacingAKeyKeepsTheByteCountRight) {
 }
 
 TEST(Thumbnail, ManyThreadsRenderTheSameImagesAsOne) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   std::vector<Eigen::VectorXd> poses;
   for (std::uint64_t seed = 1; seed <= 6; ++seed)
     poses.push_back(core::random_configuration(m, seed));
@@ -459,7 +454,7 @@ TEST(Thumbnail, ManyThreadsRenderTheSameImagesAsOne) {
 }
 
 TEST(ThumbnailRenderer, NoGlObjectOutlivesARenderAndReleaseFreesAll) {
-  const auto& m = *human48();
+  const auto& m = *fixtures::human48();
   const Eigen::VectorXd q = core::neutral_configuration(m);
   server::render_thumbnail(m, q, plain(64));
   const auto before = server::thumbnail_renderer_stats();
