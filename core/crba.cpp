@@ -93,14 +93,12 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorX
 }
 
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
+  // The elimination runs on the transposed (upper) positions, H(j, i) standing for H(i, j) with j
+  // an ancestor of i: walking the ancestors then reads down a column, which is contiguous
+  // wherever coordinates are numbered consecutively (limbs, chains), instead of across a row (a
+  // cache miss per entry once the matrix outgrows the cache: 2x on a 512-link chain). The lower
+  // triangle goes up first and L comes back down after, as documented.
   const std::vector<int>& lambda = model.parent_v;
-  // LTDL (RBDA Table 6.3): eliminate from the leaves up, touching only ancestor pairs. The
-  // elimination runs on the transposed (upper) positions, H(j, i) standing for H(i, j) with j an
-  // ancestor of i: walking the ancestors then reads down a column, which is contiguous wherever
-  // coordinates are numbered consecutively (limbs, chains), instead of across a row (a cache miss
-  // per entry once the matrix outgrows the cache: 2x on a 512-link chain). Same operations,
-  // same results; L goes back to the lower triangle as documented. The runs are short (a limb),
-  // so they are plain loops: a vectorized segment's set-up costs more than the run.
   double* const base = H.data();
   const Eigen::Index stride = H.outerStride();
   const auto column = [&](int j) { return base + j * stride; };
@@ -111,22 +109,44 @@ void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
       for (int j = c; j < c + n; ++j) Hk[j] = column(j)[k];
     });
   }
+  ltdl_factorize_upper(model, H);
+  for (int k = 1; k < model.nv; ++k) {
+    if (lambda[k] < 0) continue;
+    const double* Hk = column(k);
+    for_each_run_from(model, lambda[k], [&](int c, int n) {
+      for (int j = c; j < c + n; ++j) column(j)[k] = Hk[j];
+    });
+  }
+}
+
+void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
+  // LTDL (RBDA Table 6.3): eliminate from the leaves up, touching only ancestor pairs, each
+  // column k holding H(j, k) for the ancestors j of k. The runs are short (a limb), so they are
+  // plain loops: a vectorized segment's set-up costs more than the run.
+  const std::vector<int>& lambda = model.parent_v;
+  double* const base = H.data();
+  const Eigen::Index stride = H.outerStride();
   for (int k = model.nv - 1; k >= 0; --k) {
-    double* const Hk = column(k);  // Hk[j] = H(j, k) for the ancestors j of k
+    double* const Hk = base + k * stride;  // Hk[j] = H(j, k) for the ancestors j of k
     const double inv_dk = 1.0 / Hk[k];
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
       // H(j, i) −= a H(j, k) for i and its ancestors j, then H(i, k) = a
       const double a = Hk[i] * inv_dk;
-      double* const Hi = column(i);
+      double* const Hi = base + i * stride;
       for_each_run_from(model, i, [&](int c, int n) {
         for (int j = c; j < c + n; ++j) Hi[j] -= a * Hk[j];
       });
       Hk[i] = a;
     }
-    if (lambda[k] < 0) continue;
-    for_each_run_from(model, lambda[k], [&](int c, int n) {
-      for (int j = c; j < c + n; ++j) column(j)[k] = Hk[j];
-    });
+  }
+}
+
+void zero_tree_pattern_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
+  double* const base = H.data();
+  const Eigen::Index stride = H.outerStride();
+  for (int k = 0; k < model.nv; ++k) {
+    double* const Hk = base + k * stride;
+    for_each_run_from(model, k, [&](int c, int n) { std::fill(Hk + c, Hk + c + n, 0.0); });
   }
 }
 

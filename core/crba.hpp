@@ -24,6 +24,12 @@ void factorize_mass_matrix(const Model& model, Data& data);
 /// other in Model::parent_v): in place, lower triangle read, L written over both triangles (the
 /// upper as Lᵀ) and D over the diagonal; the solves below read L from the upper triangle.
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
+/// ltdl_factorize on the upper triangle alone: H(j, k) read for k's ancestors j (and the
+/// diagonal), L written there, nothing else read or written. For a matrix formed in those
+/// positions (zero_tree_pattern_upper, then the entries), which the solves below read as is.
+void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
+/// Zeroes the positions ltdl_factorize_upper reads: H(j, k) for k and each ancestor j of k.
+void zero_tree_pattern_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
 /// x ← H⁻¹ x with a matrix factorized by ltdl_factorize.
 void ltdl_solve(const Model& model,
                 const Eigen::Ref<const Eigen::MatrixXd>& LTDL,

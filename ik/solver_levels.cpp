@@ -181,13 +181,14 @@ void Solver::solve_pin_level(bool first_round) {
 }
 
 void Solver::factorize_pin_level() {
-  // A = J̃2ᵀ J̃2 + k E (lower triangle), then A = Lᵀ D L. The rows of one link task share its
+  // A = J̃2ᵀ J̃2 + k E, then A = Lᵀ D L, both in the upper ancestor positions A(j, c) (j = c or an
+  // ancestor of c) alone: nothing else of A is ever read. The rows of one link task share its
   // root path: they are gathered along the path into a dense block P (its columns contiguous)
   // and Pᵀ P added one entry per pair of coordinates instead of one per row and pair.
   Workspace& w = ws_;
   const auto J2 = w.pin_scaled.topRows(w.pin_rows);
   Eigen::MatrixXd& A = w.normal_matrix;
-  A.setZero();
+  core::zero_tree_pattern_upper(model_, A);
   for (int r = 0; r < w.pin_rows;) {
     const int support = w.pin_row_support[r];
     if (support < 0) {
@@ -202,16 +203,17 @@ void Solver::factorize_pin_level() {
     const int m = end - r;
     auto P = w.path_rows.topLeftCorner(m, n);
     for (int a = 0; a < n; ++a) P.col(a) = J2.col(cols[a]).segment(r, m);
-    // A(cols[a], cols[c]) += P(:, a) · P(:, c) for c <= a: columns of P are contiguous
+    // A(cols[c], cols[a]) += P(:, c) · P(:, a) for c <= a (cols ascending: cols[c] is cols[a]
+    // or an ancestor of it); columns of P and of A are contiguous
     const Eigen::Index stride = A.outerStride(), p_stride = w.path_rows.outerStride();
     for (int a = 0; a < n; ++a) {
       const double* pa = w.path_rows.data() + a * p_stride;
-      double* A_a = A.data() + cols[a];  // row cols[a]: A_a[j * stride] = A(cols[a], j)
+      double* A_a = A.data() + cols[a] * stride;  // column cols[a]: A_a[j] = A(j, cols[a])
       for (int c = 0; c <= a; ++c) {
         const double* pc = w.path_rows.data() + c * p_stride;
         double dot = 0;
         for (int t = 0; t < m; ++t) dot += pa[t] * pc[t];
-        A_a[cols[c] * stride] += dot;
+        A_a[cols[c]] += dot;
       }
     }
     r = end;
@@ -219,7 +221,7 @@ void Solver::factorize_pin_level() {
   const double k = pin_damping();
   report_.lower_damping = k;
   A.diagonal().array() += k;
-  core::ltdl_factorize(model_, A);
+  core::ltdl_factorize_upper(model_, A);
   w.constraint_columns = 0;
 }
 
@@ -248,9 +250,9 @@ double Solver::pin_damping() {
     // w: geometric mean of the pivots of J̃2ᵀJ̃2 (the unprojected rows); damping grows below w0
     const int n = model_.nv;
     Eigen::MatrixXd& pivots = w.manipulability_pivots;
-    pivots = w.normal_matrix;
+    pivots = w.normal_matrix;  // its upper ancestor positions, as factorize_pin_level formed them
     pivots.diagonal().array() += 1e-12;
-    core::ltdl_factorize(model_, pivots);
+    core::ltdl_factorize_upper(model_, pivots);
     double log_det = 0;
     for (int i = 0; i < n; ++i) log_det += std::log(pivots(i, i));
     const double manipulability = std::exp(0.5 * log_det / n);

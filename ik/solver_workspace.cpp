@@ -65,7 +65,7 @@ Workspace::Workspace(const core::Model& model)
       joint_velocity(Eigen::VectorXd::Zero(model.nv)),
       point_jacobian(model.nv),
       range_flagged(model.njoints, 0),
-      normal_matrix(model.nv, model.nv),
+      normal_matrix(Eigen::MatrixXd::Zero(model.nv, model.nv)),  // only its tree pattern changes
       path_rows(6, model.nv),
       manipulability_pivots(model.nv, model.nv),
       normal_rhs(model.nv),

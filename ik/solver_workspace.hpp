@@ -92,8 +92,9 @@ struct Workspace {
   std::vector<std::vector<int>> link_path;  // per link: coordinates on its root path, ascending
   Eigen::MatrixXd pin_scaled;               // J̃2 = diag(√weight) J2 diag(c) (m2 x nv)
   Eigen::VectorXd pin_residual;             // Δṗ = ṽ2 − J̃2 x, what levels 1 and 2 leave
-  Eigen::MatrixXd normal_matrix;  // A = J̃2ᵀ J̃2 + kE, then its tree-sparse Lᵀ D L (nv x nv)
-  Eigen::MatrixXd path_rows;      // one task's rows of J̃2 gathered along its link's path (6 x nv)
+  // A = J̃2ᵀ J̃2 + kE, then its tree-sparse Lᵀ D L, in the upper ancestor positions (nv x nv)
+  Eigen::MatrixXd normal_matrix;
+  Eigen::MatrixXd path_rows;  // one task's rows of J̃2 gathered along its link's path (6 x nv)
   Eigen::MatrixXd manipulability_pivots;  // Lᵀ D L of J̃2ᵀ J̃2, w = (Π D)^(1/2n) (nv x nv)
   Eigen::VectorXd normal_rhs;             // b = J̃2ᵀ Δṗ (nv)
   Eigen::VectorXd half_solved_rhs;        // L⁻ᵀ b (nv)

@@ -143,6 +143,46 @@ TEST(Ltdl, SparseSolveAgreesWithDenseCholesky) {
   }
 }
 
+TEST(Ltdl, UpperOnlyFactorizationMatchesTheFullOneAndTouchesNothingElse) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 5));
+    Eigen::MatrixXd full = M;
+    ltdl_factorize(*m, full);
+    // the upper ancestor positions of M on a matrix of sevens, zeroed there first
+    Eigen::MatrixXd upper = Eigen::MatrixXd::Constant(m->nv, m->nv, 7.0);
+    zero_tree_pattern_upper(*m, upper);
+    int pattern = 0;
+    for (int k = 0; k < m->nv; ++k) {
+      for (int j = k; j >= 0; j = m->parent_v[j]) {
+        EXPECT_EQ(upper(j, k), 0.0) << m->name << " (" << j << ", " << k << ")";
+        upper(j, k) = M(j, k);
+        ++pattern;
+      }
+    }
+    ltdl_factorize_upper(*m, upper);
+    int sevens = 0;
+    for (int k = 0; k < m->nv; ++k) {
+      for (int j = 0; j < m->nv; ++j) {
+        bool on_pattern = false;
+        for (int a = k; a >= 0 && !on_pattern; a = m->parent_v[a]) on_pattern = a == j;
+        if (on_pattern) {
+          EXPECT_NEAR(upper(j, k), full(j, k), 1e-12 * (1 + std::abs(full(j, k))))
+              << m->name << " (" << j << ", " << k << ")";
+        } else {
+          sevens += upper(j, k) == 7.0;
+        }
+      }
+    }
+    EXPECT_EQ(sevens, m->nv * m->nv - pattern) << m->name << ": an entry off the pattern changed";
+    // the solves read the upper factor alone
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
+    Eigen::VectorXd x = b;
+    ltdl_solve(*m, upper, x);
+    EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm())) << m->name;
+  }
+}
+
 TEST(Dynamics, PerStepPathDoesNotAllocate) {
   const auto m = fixtures::branching_tree();
   Data d(*m);
