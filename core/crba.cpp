@@ -1,6 +1,7 @@
 #include "core/crba.hpp"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "core/hinge.hpp"
 #include "core/jacobian.hpp"
@@ -101,22 +102,27 @@ void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   const std::vector<int>& lambda = model.parent_v;
   double* const base = H.data();
   const Eigen::Index stride = H.outerStride();
-  const auto column = [&](int j) { return base + j * stride; };
-  for (int k = 1; k < model.nv; ++k) {
-    if (lambda[k] < 0) continue;
-    double* Hk = column(k);
-    for_each_run_from(model, lambda[k], [&](int c, int n) {
-      for (int j = c; j < c + n; ++j) Hk[j] = column(j)[k];
-    });
-  }
+  // H(j, k) and H(k, j) for k's ancestors j, one copied onto the other (the direction fixed at
+  // compile time: this is on the mass matrix's path)
+  const auto copy_pairs = [&](auto lower_to_upper) {
+    for (int k = 1; k < model.nv; ++k) {
+      if (lambda[k] < 0) continue;
+      double* const Hk = base + k * stride;  // Hk[j] = H(j, k): upper
+      for_each_run_from(model, lambda[k], [&](int c, int n) {
+        for (int j = c; j < c + n; ++j) {
+          double& lower = base[j * stride + k];  // H(k, j)
+          if constexpr (decltype(lower_to_upper)::value) {
+            Hk[j] = lower;
+          } else {
+            lower = Hk[j];
+          }
+        }
+      });
+    }
+  };
+  copy_pairs(std::true_type{});
   ltdl_factorize_upper(model, H);
-  for (int k = 1; k < model.nv; ++k) {
-    if (lambda[k] < 0) continue;
-    const double* Hk = column(k);
-    for_each_run_from(model, lambda[k], [&](int c, int n) {
-      for (int j = c; j < c + n; ++j) column(j)[k] = Hk[j];
-    });
-  }
+  copy_pairs(std::false_type{});
 }
 
 void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
