@@ -147,15 +147,6 @@ void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
   }
 }
 
-void zero_tree_pattern_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
-  double* const base = H.data();
-  const Eigen::Index stride = H.outerStride();
-  for (int k = 0; k < model.nv; ++k) {
-    double* const Hk = base + k * stride;
-    for_each_run_from(model, k, [&](int c, int n) { std::fill(Hk + c, Hk + c + n, 0.0); });
-  }
-}
-
 // L(k, i) for the ancestors i of k sits in both triangles after ltdl_factorize; the solves read it
 // down column k (contiguous) as H(i, k).
 void ltdl_solve_lt(const Model& model,

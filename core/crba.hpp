@@ -25,11 +25,9 @@ void factorize_mass_matrix(const Model& model, Data& data);
 /// upper as Lᵀ) and D over the diagonal; the solves below read L from the upper triangle.
 void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
 /// ltdl_factorize on the upper triangle alone: H(j, k) read for k's ancestors j (and the
-/// diagonal), L written there, nothing else read or written. For a matrix formed in those
-/// positions (zero_tree_pattern_upper, then the entries), which the solves below read as is.
+/// diagonal), L written there, nothing else read or written; the solves below read it as is.
+/// (core::BranchSparseMatrix stores only those positions, for matrices formed there.)
 void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
-/// Zeroes the positions ltdl_factorize_upper reads: H(j, k) for k and each ancestor j of k.
-void zero_tree_pattern_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H);
 /// x ← H⁻¹ x with a matrix factorized by ltdl_factorize.
 void ltdl_solve(const Model& model,
                 const Eigen::Ref<const Eigen::MatrixXd>& LTDL,

@@ -1,9 +1,9 @@
 // The three levels of ik::Solver, each solved in the null space of the levels above it, in
 // weight-scaled coordinates x (θ̇ = diag(c) x; ik/solver_workspace.hpp has the notation).
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
-#include "core/crba.hpp"
 #include "ik/small_cholesky.hpp"
 #include "ik/solver.hpp"
 
@@ -181,19 +181,19 @@ void Solver::solve_pin_level(bool first_round) {
 }
 
 void Solver::factorize_pin_level() {
-  // A = J̃2ᵀ J̃2 + k E, then A = Lᵀ D L, both in the upper ancestor positions A(j, c) (j = c or an
-  // ancestor of c) alone: nothing else of A is ever read. The rows of one link task share its
-  // root path: they are gathered along the path into a dense block P (its columns contiguous)
-  // and Pᵀ P added one entry per pair of coordinates instead of one per row and pair.
+  // A = J̃2ᵀ J̃2 + k E, then A = Lᵀ D L, in A's tree pattern alone (core::BranchSparseMatrix: the
+  // entries A(j, c) for c and its ancestors j, along c's root path). The rows of one link task
+  // share its root path: they are gathered along the path into a dense block P (its columns
+  // contiguous) and Pᵀ P added one entry per pair of coordinates instead of one per row and pair.
   Workspace& w = ws_;
   const auto J2 = w.pin_scaled.topRows(w.pin_rows);
-  Eigen::MatrixXd& A = w.normal_matrix;
-  core::zero_tree_pattern_upper(model_, A);
+  core::BranchSparseMatrix& A = w.normal_matrix;
+  A.set_zero();
   for (int r = 0; r < w.pin_rows;) {
     const int support = w.pin_row_support[r];
     if (support < 0) {
       const int c = -1 - support;
-      A(c, c) += J2(r, c) * J2(r, c);
+      A.diagonal(c) += J2(r, c) * J2(r, c);
       ++r;
       continue;
     }
@@ -203,25 +203,27 @@ void Solver::factorize_pin_level() {
     const int m = end - r;
     auto P = w.path_rows.topLeftCorner(m, n);
     for (int a = 0; a < n; ++a) P.col(a) = J2.col(cols[a]).segment(r, m);
-    // A(cols[c], cols[a]) += P(:, c) · P(:, a) for c <= a (cols ascending: cols[c] is cols[a]
-    // or an ancestor of it); columns of P and of A are contiguous
-    const Eigen::Index stride = A.outerStride(), p_stride = w.path_rows.outerStride();
+    // A(cols[c], cols[a]) += P(:, c) · P(:, a) for c <= a. cols is the whole root path, root
+    // first, so cols[c] sits at depth c and is entry c of column cols[a]
+    const Eigen::Index p_stride = w.path_rows.outerStride();
     for (int a = 0; a < n; ++a) {
       const double* pa = w.path_rows.data() + a * p_stride;
-      double* A_a = A.data() + cols[a] * stride;  // column cols[a]: A_a[j] = A(j, cols[a])
+      double* A_a = A.column(cols[a]);
+      assert(A.depth(cols[a]) == a);
       for (int c = 0; c <= a; ++c) {
         const double* pc = w.path_rows.data() + c * p_stride;
         double dot = 0;
         for (int t = 0; t < m; ++t) dot += pa[t] * pc[t];
-        A_a[cols[c]] += dot;
+        A_a[c] += dot;
       }
     }
     r = end;
   }
   const double k = pin_damping();
   report_.lower_damping = k;
-  A.diagonal().array() += k;
-  core::ltdl_factorize_upper(model_, A);
+  for (int c = 0; c < model_.nv; ++c) A.diagonal(c) += k;
+  A.factorize();
+  for (int c = 0; c < model_.nv; ++c) w.pivot_inverse[c] = 1.0 / A.diagonal(c);
   w.constraint_columns = 0;
 }
 
@@ -249,12 +251,12 @@ double Solver::pin_damping() {
   if (settings_.damping_schedule == DampingSchedule::kManipulability) {
     // w: geometric mean of the pivots of J̃2ᵀJ̃2 (the unprojected rows); damping grows below w0
     const int n = model_.nv;
-    Eigen::MatrixXd& pivots = w.manipulability_pivots;
-    pivots = w.normal_matrix;  // its upper ancestor positions, as factorize_pin_level formed them
-    pivots.diagonal().array() += 1e-12;
-    core::ltdl_factorize_upper(model_, pivots);
+    core::BranchSparseMatrix& pivots = w.manipulability_pivots;
+    pivots = w.normal_matrix;  // as factorize_pin_level formed it, before the ridge
+    for (int i = 0; i < n; ++i) pivots.diagonal(i) += 1e-12;
+    pivots.factorize();
     double log_det = 0;
-    for (int i = 0; i < n; ++i) log_det += std::log(pivots(i, i));
+    for (int i = 0; i < n; ++i) log_det += std::log(pivots.diagonal(i));
     const double manipulability = std::exp(0.5 * log_det / n);
     const double w0 = settings_.manipulability_threshold;
     const double shortfall = 1 - manipulability / w0;
@@ -278,16 +280,16 @@ void Solver::solve_pin_normal_equations() {
     }
     for (const int c : w.link_path[support]) w.normal_rhs[c] += J2(r, c) * dp[r];
   }
-  const Eigen::MatrixXd& A = w.normal_matrix;
+  const core::BranchSparseMatrix& A = w.normal_matrix;
   Eigen::VectorXd& y = w.x_pin;
   w.half_solved_rhs = w.normal_rhs;
-  core::ltdl_solve_lt(model_, A, w.half_solved_rhs);  // L⁻ᵀ b
-  const auto Dinv = A.diagonal().cwiseInverse();
+  A.solve_lt(w.half_solved_rhs);  // L⁻ᵀ b
+  const Eigen::VectorXd& Dinv = w.pivot_inverse;
   const int m1 = w.drag_rows;
   const int mc = m1 + w.range_rows;
   if (mc == 0) {
-    y = w.half_solved_rhs.cwiseQuotient(A.diagonal());
-    core::ltdl_solve_l(model_, A, y);
+    y = w.half_solved_rhs.cwiseProduct(Dinv);
+    A.solve_l(y);
     return;
   }
   // with A = Lᵀ D L: Z = L⁻ᵀ Cᵀ (half solves, each staying on its row's root path), then
@@ -299,7 +301,7 @@ void Solver::solve_pin_normal_equations() {
     } else {
       w.constraint_half.col(r) = w.range_projected.row(r - m1).transpose();
     }
-    core::ltdl_solve_lt(model_, A, w.constraint_half.col(r));
+    A.solve_lt(w.constraint_half.col(r));
   }
   w.constraint_columns = mc;
   const auto Z = w.constraint_half.leftCols(mc);
@@ -322,7 +324,7 @@ void Solver::solve_pin_normal_equations() {
   y = w.half_solved_rhs;
   y.noalias() -= Z * lambda;
   y.array() *= Dinv.array();
-  core::ltdl_solve_l(model_, A, y);
+  A.solve_l(y);
 }
 
 }  // namespace ik

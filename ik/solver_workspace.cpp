@@ -65,9 +65,10 @@ Workspace::Workspace(const core::Model& model)
       joint_velocity(Eigen::VectorXd::Zero(model.nv)),
       point_jacobian(model.nv),
       range_flagged(model.njoints, 0),
-      normal_matrix(Eigen::MatrixXd::Zero(model.nv, model.nv)),  // only its tree pattern changes
+      normal_matrix(model),
+      pivot_inverse(model.nv),
       path_rows(6, model.nv),
-      manipulability_pivots(model.nv, model.nv),
+      manipulability_pivots(model),
       normal_rhs(model.nv),
       half_solved_rhs(model.nv),
       scaled_half_rhs(model.nv) {

@@ -13,6 +13,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/branch_sparse_matrix.hpp"
 #include "core/jacobian.hpp"
 #include "core/model.hpp"
 #include "ik/limits.hpp"
@@ -92,15 +93,16 @@ struct Workspace {
   std::vector<std::vector<int>> link_path;  // per link: coordinates on its root path, ascending
   Eigen::MatrixXd pin_scaled;               // J̃2 = diag(√weight) J2 diag(c) (m2 x nv)
   Eigen::VectorXd pin_residual;             // Δṗ = ṽ2 − J̃2 x, what levels 1 and 2 leave
-  // A = J̃2ᵀ J̃2 + kE, then its tree-sparse Lᵀ D L, in the upper ancestor positions (nv x nv)
-  Eigen::MatrixXd normal_matrix;
-  Eigen::MatrixXd path_rows;  // one task's rows of J̃2 gathered along its link's path (6 x nv)
-  Eigen::MatrixXd manipulability_pivots;  // Lᵀ D L of J̃2ᵀ J̃2, w = (Π D)^(1/2n) (nv x nv)
-  Eigen::VectorXd normal_rhs;             // b = J̃2ᵀ Δṗ (nv)
-  Eigen::VectorXd half_solved_rhs;        // L⁻ᵀ b (nv)
-  Eigen::VectorXd scaled_half_rhs;        // D⁻¹ L⁻ᵀ b (nv)
-  Eigen::MatrixXd constraint_half;        // Z = L⁻ᵀ Cᵀ, one column per row of C (nv x mc)
-  int constraint_columns = 0;             // columns of Z valid for the current factorization
+  // A = J̃2ᵀ J̃2 + kE, then its tree-sparse Lᵀ D L, stored along each coordinate's root path
+  core::BranchSparseMatrix normal_matrix;
+  Eigen::VectorXd pivot_inverse;  // D⁻¹ of that factorization (nv)
+  Eigen::MatrixXd path_rows;      // one task's rows of J̃2 gathered along its link's path (6 x nv)
+  core::BranchSparseMatrix manipulability_pivots;  // Lᵀ D L of J̃2ᵀ J̃2, w = (Π D)^(1/2n)
+  Eigen::VectorXd normal_rhs;                      // b = J̃2ᵀ Δṗ (nv)
+  Eigen::VectorXd half_solved_rhs;                 // L⁻ᵀ b (nv)
+  Eigen::VectorXd scaled_half_rhs;                 // D⁻¹ L⁻ᵀ b (nv)
+  Eigen::MatrixXd constraint_half;  // Z = L⁻ᵀ Cᵀ, one column per row of C (nv x mc)
+  int constraint_columns = 0;       // columns of Z valid for the current factorization
   // Zᵀ D⁻¹ (mc x nv), row-major like Zᵀ
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> constraint_scaled;
   Eigen::MatrixXd constraint_schur;  // C A⁻¹ Cᵀ = Zᵀ D⁻¹ Z, then its Cholesky factor

@@ -4,6 +4,7 @@
 #include <Eigen/Cholesky>
 
 #include "core/aba.hpp"
+#include "core/branch_sparse_matrix.hpp"
 #include "core/configuration.hpp"
 #include "core/crba.hpp"
 #include "core/jacobian.hpp"
@@ -149,13 +150,11 @@ TEST(Ltdl, UpperOnlyFactorizationMatchesTheFullOneAndTouchesNothingElse) {
     const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 5));
     Eigen::MatrixXd full = M;
     ltdl_factorize(*m, full);
-    // the upper ancestor positions of M on a matrix of sevens, zeroed there first
+    // the upper ancestor positions of M on a matrix of sevens
     Eigen::MatrixXd upper = Eigen::MatrixXd::Constant(m->nv, m->nv, 7.0);
-    zero_tree_pattern_upper(*m, upper);
     int pattern = 0;
     for (int k = 0; k < m->nv; ++k) {
       for (int j = k; j >= 0; j = m->parent_v[j]) {
-        EXPECT_EQ(upper(j, k), 0.0) << m->name << " (" << j << ", " << k << ")";
         upper(j, k) = M(j, k);
         ++pattern;
       }
@@ -181,6 +180,65 @@ TEST(Ltdl, UpperOnlyFactorizationMatchesTheFullOneAndTouchesNothingElse) {
     ltdl_solve(*m, upper, x);
     EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm())) << m->name;
   }
+}
+
+TEST(BranchSparseMatrix, FactorizationAndSolvesMatchTheDenseOnes) {
+  auto models_with_a_figure = models();
+  models_with_a_figure.push_back(fixtures::human48());  // free root, ball joints: deep paths
+  for (const auto& m : models_with_a_figure) {
+    Data d(*m);
+    const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 11));
+    BranchSparseMatrix A(*m);
+    ASSERT_EQ(A.size(), m->nv);
+    // each column holds k's root path, root first, k last
+    for (int k = 0; k < m->nv; ++k) {
+      EXPECT_EQ(A.path(k)[A.depth(k)], k) << m->name;
+      for (int p = A.depth(k); p > 0; --p) {
+        EXPECT_EQ(A.path(k)[p - 1], m->parent_v[A.path(k)[p]]) << m->name << " column " << k;
+      }
+      EXPECT_EQ(m->parent_v[A.path(k)[0]], -1) << m->name << " column " << k;
+      for (int p = 0; p <= A.depth(k); ++p) A.column(k)[p] = M(A.path(k)[p], k);
+    }
+    // M has the tree's sparsity, so the pattern holds all of it
+    EXPECT_EQ((A.dense() - M).norm(), 0.0) << m->name;
+    Eigen::MatrixXd full = M;
+    ltdl_factorize(*m, full);
+    A.factorize();
+    for (int k = 0; k < m->nv; ++k) {
+      for (int p = 0; p <= A.depth(k); ++p) {
+        const double expected = full(A.path(k)[p], k);
+        EXPECT_NEAR(A.column(k)[p], expected, 1e-12 * (1 + std::abs(expected)))
+            << m->name << " (" << A.path(k)[p] << ", " << k << ")";
+      }
+    }
+    // x = M⁻¹ b = L⁻¹ D⁻¹ L⁻ᵀ b
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
+    Eigen::VectorXd x = b;
+    A.solve_lt(x);
+    for (int k = 0; k < m->nv; ++k) x[k] /= A.diagonal(k);
+    A.solve_l(x);
+    EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm())) << m->name;
+  }
+}
+
+TEST(BranchSparseMatrix, FactorizesAndSolvesWithoutAllocating) {
+  const auto m = fixtures::human48();
+  Data d(*m);
+  const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 3));
+  BranchSparseMatrix A(*m), copy(*m);
+  Eigen::VectorXd x = Eigen::VectorXd::Ones(m->nv);
+  fixtures::AllocationCounter allocations;
+  Eigen::internal::set_is_malloc_allowed(false);
+  A.set_zero();
+  for (int k = 0; k < m->nv; ++k) {
+    for (int p = 0; p <= A.depth(k); ++p) A.column(k)[p] = M(A.path(k)[p], k);
+  }
+  copy = A;
+  copy.factorize();
+  copy.solve_lt(x);
+  copy.solve_l(x);
+  Eigen::internal::set_is_malloc_allowed(true);
+  EXPECT_EQ(allocations.count(), 0);
 }
 
 TEST(Dynamics, PerStepPathDoesNotAllocate) {
