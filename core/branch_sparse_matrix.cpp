@@ -49,6 +49,22 @@ void BranchSparseMatrix::solve_lt(Eigen::Ref<Eigen::VectorXd> x) const {
   }
 }
 
+void BranchSparseMatrix::solve_lt_columns(
+    Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> X) const {
+  // solve_lt on every column, a row of X at a time (short rows: plain loops)
+  const Eigen::Index n = X.cols(), stride = X.outerStride();
+  for (int k = size() - 1; k >= 0; --k) {
+    const double* const Xk = X.data() + k * stride;
+    if (std::all_of(Xk, Xk + n, [](double x) { return x == 0; })) continue;
+    const double* const Lk = column(k);
+    const int* const path_k = path(k);
+    for (int p = 0; p < depth_[k]; ++p) {
+      double* const Xj = X.data() + path_k[p] * stride;
+      for (Eigen::Index c = 0; c < n; ++c) Xj[c] -= Lk[p] * Xk[c];
+    }
+  }
+}
+
 void BranchSparseMatrix::solve_l(Eigen::Ref<Eigen::VectorXd> x) const {
   // forward substitution with L: x_k −= Σ L(k, j) x_j over the ancestors j, root first
   double* const xs = x.data();

@@ -40,6 +40,9 @@ class BranchSparseMatrix {
   void factorize();
   /// x ← L⁻ᵀ x, after factorize().
   void solve_lt(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// X ← L⁻ᵀ X for all columns of X at once (its rows contiguous); rows that stay zero cost a test.
+  void solve_lt_columns(
+      Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> X) const;
   /// x ← L⁻¹ x, after factorize().
   void solve_l(Eigen::Ref<Eigen::VectorXd> x) const;
   /// The entries as a dense symmetric matrix (zeros off the pattern): for tests and printing.

@@ -295,25 +295,33 @@ void Solver::solve_pin_normal_equations() {
   // with A = Lᵀ D L: Z = L⁻ᵀ Cᵀ (half solves, each staying on its row's root path), then
   // C A⁻¹ Cᵀ = Zᵀ D⁻¹ Z and the correction A⁻¹ Cᵀ λ = L⁻¹ D⁻¹ Z λ. Columns of earlier rounds
   // are still valid.
-  for (int r = w.constraint_columns; r < mc; ++r) {
-    if (r < m1) {
-      w.constraint_half.col(r) = w.drag_scaled.row(r).transpose();
-    } else {
-      w.constraint_half.col(r) = w.range_projected.row(r - m1).transpose();
+  auto Z = w.constraint_half.topLeftCorner(model_.nv, mc);
+  if (w.constraint_columns < mc) {
+    for (int r = w.constraint_columns; r < mc; ++r) {
+      Z.col(r) =
+          r < m1 ? w.drag_scaled.row(r).transpose() : w.range_projected.row(r - m1).transpose();
     }
-    A.solve_lt(w.constraint_half.col(r));
+    A.solve_lt_columns(Z.rightCols(mc - w.constraint_columns));
+    w.constraint_columns = mc;
   }
-  w.constraint_columns = mc;
-  const auto Z = w.constraint_half.leftCols(mc);
-  auto ZtDinv = w.constraint_scaled.topRows(mc);
   auto Sc = w.constraint_schur.topLeftCorner(mc, mc);
   auto lambda = w.constraint_multipliers.head(mc);
   // Sc = Zᵀ D⁻¹ Z (+ a tiny ridge: when a range row repeats a drag direction the system is
-  // singular but consistent, and the ridge picks the finite solution); λ = Sc⁻¹ C u
-  ZtDinv = Z.transpose() * Dinv.asDiagonal();
-  Sc.noalias() = ZtDinv * Z;
-  w.scaled_half_rhs = Dinv.asDiagonal() * w.half_solved_rhs;
-  lambda.noalias() = Z.transpose() * w.scaled_half_rhs;
+  // singular but consistent, and the ridge picks the finite solution); λ = Sc⁻¹ Zᵀ D⁻¹ L⁻ᵀ b =
+  // Sc⁻¹ C u. Both are sums over the rows of Z, and only the rows on the constrained rows' root
+  // paths are nonzero.
+  Sc.setZero();
+  lambda.setZero();
+  const Eigen::VectorXd& h = w.half_solved_rhs;
+  for (int k = 0; k < model_.nv; ++k) {
+    const double* const Zk = Z.data() + k * Z.outerStride();
+    if (std::all_of(Zk, Zk + mc, [](double z) { return z == 0; })) continue;
+    for (int i = 0; i < mc; ++i) {
+      const double dz = Dinv[k] * Zk[i];
+      for (int j = 0; j <= i; ++j) Sc(i, j) += dz * Zk[j];  // the lower triangle Cholesky reads
+      lambda[i] += dz * h[k];
+    }
+  }
   Sc.diagonal().array() += 1e-12 * std::max(1.0, Sc.diagonal().maxCoeff());
   if (cholesky_in_place(Sc)) {
     cholesky_solve(Sc, lambda);
@@ -321,7 +329,7 @@ void Solver::solve_pin_normal_equations() {
     lambda.setZero();  // cannot happen for a positive ridge; keep the unconstrained step bounded
   }
   // y = u − L⁻¹ D⁻¹ Z λ = L⁻¹ D⁻¹ (L⁻ᵀ b − Z λ)
-  y = w.half_solved_rhs;
+  y = h;
   y.noalias() -= Z * lambda;
   y.array() *= Dinv.array();
   A.solve_l(y);

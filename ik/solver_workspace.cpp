@@ -70,8 +70,7 @@ Workspace::Workspace(const core::Model& model)
       path_rows(6, model.nv),
       manipulability_pivots(model),
       normal_rhs(model.nv),
-      half_solved_rhs(model.nv),
-      scaled_half_rhs(model.nv) {
+      half_solved_rhs(model.nv) {
   // level 2 never has more rows than every joint's range block at once
   int range_capacity = 0;
   for (int i = 1; i < model.njoints; ++i) range_capacity += range_block_rows(model, i);
@@ -117,7 +116,6 @@ void Workspace::reserve(int top_rows, int lower_rows) {
   const Eigen::Index constraints = drag_jacobian.rows() + range_velocity.size();
   if (constraint_half.cols() < constraints) {
     constraint_half.resize(nv, constraints);
-    constraint_scaled.resize(constraints, nv);
     constraint_schur.resize(constraints, constraints);
     constraint_multipliers.resize(constraints);
   }

@@ -100,11 +100,9 @@ struct Workspace {
   core::BranchSparseMatrix manipulability_pivots;  // Lᵀ D L of J̃2ᵀ J̃2, w = (Π D)^(1/2n)
   Eigen::VectorXd normal_rhs;                      // b = J̃2ᵀ Δṗ (nv)
   Eigen::VectorXd half_solved_rhs;                 // L⁻ᵀ b (nv)
-  Eigen::VectorXd scaled_half_rhs;                 // D⁻¹ L⁻ᵀ b (nv)
-  Eigen::MatrixXd constraint_half;  // Z = L⁻ᵀ Cᵀ, one column per row of C (nv x mc)
-  int constraint_columns = 0;       // columns of Z valid for the current factorization
-  // Zᵀ D⁻¹ (mc x nv), row-major like Zᵀ
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> constraint_scaled;
+  // Z = L⁻ᵀ Cᵀ, one column per row of C, row-major: the solves update rows (nv x mc)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> constraint_half;
+  int constraint_columns = 0;        // columns of Z valid for the current factorization
   Eigen::MatrixXd constraint_schur;  // C A⁻¹ Cᵀ = Zᵀ D⁻¹ Z, then its Cholesky factor
   Eigen::VectorXd constraint_multipliers;  // λ = (C A⁻¹ Cᵀ)⁻¹ C A⁻¹ b
 };

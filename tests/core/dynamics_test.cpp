@@ -218,6 +218,19 @@ TEST(BranchSparseMatrix, FactorizationAndSolvesMatchTheDenseOnes) {
     for (int k = 0; k < m->nv; ++k) x[k] /= A.diagonal(k);
     A.solve_l(x);
     EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm())) << m->name;
+    // every column at once, as one column at a time: a dense one, a zero one, one on a leaf's path
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> X =
+        Eigen::MatrixXd::Zero(m->nv, 3);
+    X.col(0) = b;
+    X(m->nv - 1, 2) = 1.5;
+    const Eigen::MatrixXd before = X;
+    A.solve_lt_columns(X);
+    for (int c = 0; c < 3; ++c) {
+      Eigen::VectorXd column = before.col(c);
+      A.solve_lt(column);
+      EXPECT_EQ((X.col(c) - column).norm(), 0.0) << m->name << " column " << c;
+    }
+    EXPECT_EQ(X.col(1).norm(), 0.0) << m->name;
   }
 }
 
@@ -227,6 +240,8 @@ TEST(BranchSparseMatrix, FactorizesAndSolvesWithoutAllocating) {
   const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 3));
   BranchSparseMatrix A(*m), copy(*m);
   Eigen::VectorXd x = Eigen::VectorXd::Ones(m->nv);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> X =
+      Eigen::MatrixXd::Ones(m->nv, 4);
   fixtures::AllocationCounter allocations;
   Eigen::internal::set_is_malloc_allowed(false);
   A.set_zero();
@@ -237,6 +252,7 @@ TEST(BranchSparseMatrix, FactorizesAndSolvesWithoutAllocating) {
   copy.factorize();
   copy.solve_lt(x);
   copy.solve_l(x);
+  copy.solve_lt_columns(X);
   Eigen::internal::set_is_malloc_allowed(true);
   EXPECT_EQ(allocations.count(), 0);
 }
