@@ -4,6 +4,19 @@
 
 namespace core {
 
+namespace {
+
+// y[0 … n) −= a x[0 … n) for two distinct columns (__restrict__: no overlap check before the loop,
+// which costs more than these short updates)
+inline void subtract_scaled_prefix(double* __restrict__ y,
+                                   const double* __restrict__ x,
+                                   double a,
+                                   int n) {
+  for (int j = 0; j < n; ++j) y[j] -= a * x[j];
+}
+
+}  // namespace
+
 BranchSparseMatrix::BranchSparseMatrix(const Model& model) : offset_(model.nv), depth_(model.nv) {
   int total = 0;
   for (int k = 0; k < model.nv; ++k) {
@@ -31,7 +44,7 @@ void BranchSparseMatrix::factorize() {
     for (int p = depth_[k] - 1; p >= 0; --p) {
       const double a = Ak[p] * inv_dk;
       double* const Ai = column(path_k[p]);
-      for (int j = 0; j <= p; ++j) Ai[j] -= a * Ak[j];
+      subtract_scaled_prefix(Ai, Ak, a, p + 1);
       Ak[p] = a;
     }
   }
