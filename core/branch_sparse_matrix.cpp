@@ -55,7 +55,7 @@ void BranchSparseMatrix::solve_lt(Eigen::Ref<Eigen::VectorXd> x) const {
   double* const xs = x.data();
   for (int k = size() - 1; k >= 0; --k) {
     const double xk = xs[k];
-    if (xk == 0) continue;  // constraint rows are sparse: skip what cannot change anything
+    if (xk == 0) continue;  // a zero entry changes nothing: sparse right-hand sides cost little
     const double* const Lk = column(k);
     const int* const path_k = path(k);
     for (int p = 0; p < depth_[k]; ++p) xs[path_k[p]] -= xk * Lk[p];
