@@ -60,30 +60,32 @@ std::string Solver::check_problem(const Problem& problem, const Eigen::VectorXd&
   if (!settings_error.empty()) return "settings: " + settings_error;
   auto finite_gain = [](double g) { return std::isfinite(g); };
   for (const auto& e : problem.entries()) {
-    const std::string who = "task " + std::to_string(e.id);
+    // the message is only built for a task that breaks a rule: this check runs every step
+    const auto who = [&] { return "task " + std::to_string(e.id); };
     std::string err;
     if (const auto* t = std::get_if<LinkTask>(&e.task)) {
-      const std::string kind = to_string(t->role);
+      const auto kind = [&] { return to_string(t->role); };
       if (t->link < 1 || t->link >= m.njoints) {
-        err = who + " (" + kind + "): link index out of range";
+        err = who() + " (" + kind() + "): link index out of range";
       } else if (!t->target_W.allFinite() || !t->p_LinkPoint.allFinite() ||
                  !t->velocity_W.allFinite() || !t->angular_velocity_W.allFinite()) {
-        err = who + " (" + kind + ", link '" + m.link_name[t->link] + "'): target is not finite";
+        err =
+            who() + " (" + kind() + ", link '" + m.link_name[t->link] + "'): target is not finite";
       } else if (!t->target_R_W.coeffs().allFinite() ||
                  std::abs(t->target_R_W.norm() - 1.0) > 1e-6) {
-        err = who + " (" + kind + ", link '" + m.link_name[t->link] +
+        err = who() + " (" + kind() + ", link '" + m.link_name[t->link] +
               "'): rotation is not a unit quaternion";
       } else if (!finite_gain(t->gain) || !std::isfinite(t->weight) || t->weight < 0) {
-        err = who + " (" + kind + "): gain and weight must be finite, weight >= 0";
+        err = who() + " (" + kind() + "): gain and weight must be finite, weight >= 0";
       }
     }
     if (const auto* r = std::get_if<JointReferenceTask>(&e.task)) {
       if (r->joint < 1 || r->joint >= m.njoints) {
-        err = who + " (reference): joint index out of range";
+        err = who() + " (reference): joint index out of range";
       } else if (!std::isfinite(r->q_ref) || !std::isfinite(r->velocity_ref) ||
                  !r->R_ref.coeffs().allFinite() || !r->angular_velocity_ref.allFinite() ||
                  !finite_gain(r->gain) || !std::isfinite(r->weight) || r->weight < 0) {
-        err = who + " (reference, joint '" + m.joint_name[r->joint] + "'): values are not finite";
+        err = who() + " (reference, joint '" + m.joint_name[r->joint] + "'): values are not finite";
       }
     }
     if (!err.empty()) return err;
