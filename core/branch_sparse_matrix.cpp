@@ -1,18 +1,45 @@
 #include "core/branch_sparse_matrix.hpp"
 
 #include <algorithm>
+#include <cassert>
+
+#include "core/scaled_sum.hpp"
 
 namespace core {
 
 namespace {
 
-// y[0 … n) −= a x[0 … n) for two distinct columns (__restrict__: no overlap check before the loop,
-// which costs more than these short updates)
-inline void subtract_scaled_prefix(double* __restrict__ y,
+// y[0 … n) −= a0 x0 + a1 x1 + a2 x2 over the same prefix of two or three columns (x2 null: two)
+inline void subtract_combination_prefix(double* __restrict__ y,
+                                        const double* __restrict__ x0,
+                                        const double* __restrict__ x1,
+                                        const double* __restrict__ x2,
+                                        double a0,
+                                        double a1,
+                                        double a2,
+                                        int n) {
+  if (x2 == nullptr) {
+    for (int j = 0; j < n; ++j) y[j] -= a0 * x0[j] + a1 * x1[j];
+    return;
+  }
+  for (int j = 0; j < n; ++j) y[j] -= a0 * x0[j] + a1 * x1[j] + a2 * x2[j];
+}
+
+// y[0 … n) += Σ_t a[t] x_t[0 … n), x_t = x + t × stride: M rows of P at once, so each entry of y
+// is loaded and stored once per call instead of once per row
+template <int M>
+inline void add_scaled_rows_prefix(double* __restrict__ y,
                                    const double* __restrict__ x,
-                                   double a,
+                                   Eigen::Index stride,
+                                   const double* a,
                                    int n) {
-  for (int j = 0; j < n; ++j) y[j] -= a * x[j];
+  double s[M];
+  for (int t = 0; t < M; ++t) s[t] = a[t];
+  for (int j = 0; j < n; ++j) {
+    double sum = 0;
+    for (int t = 0; t < M; ++t) sum += s[t] * x[t * stride + j];
+    y[j] += sum;
+  }
 }
 
 }  // namespace
@@ -30,22 +57,84 @@ BranchSparseMatrix::BranchSparseMatrix(const Model& model) : offset_(model.nv), 
   for (int k = 0; k < model.nv; ++k) {
     for (int j = k; j >= 0; j = model.parent_v[j]) path_[offset_[k] + depth_[j]] = j;
   }
+  // chain blocks for factorize(), leaves first: runs lo … hi of at most kMaxChainBlock coordinates
+  // in which each of lo … hi − 1 has one child, the next (a ball or free joint's coordinates, a
+  // run of hinges)
+  std::vector<int> children(model.nv, 0);
+  for (int k = 0; k < model.nv; ++k) {
+    if (model.parent_v[k] >= 0) ++children[model.parent_v[k]];
+  }
+  for (int hi = model.nv - 1; hi >= 0;) {
+    int lo = hi;
+    while (hi - lo + 1 < kMaxChainBlock && lo > 0 && model.parent_v[lo] == lo - 1 &&
+           children[lo - 1] == 1) {
+      --lo;
+    }
+    chain_blocks_.emplace_back(lo, hi);
+    hi = lo - 1;
+  }
 }
 
 void BranchSparseMatrix::set_zero() { std::fill(values_.begin(), values_.end(), 0.0); }
 
+void BranchSparseMatrix::add_path_gram(int leaf, const Eigen::Ref<const RowMajorMatrix>& P) {
+  // A(path[c], path[a]) += P(:, c) · P(:, a) for c <= a. Column path[a] sits at depth a, so its
+  // entries 0 … a are the pairs (c, a): it gains Σ_t P(t, a) P(t, 0 … a), scaled prefixes of the
+  // (contiguous) rows of P. A link task has 6 or 3 rows: those counts are unrolled.
+  assert(P.cols() == depth(leaf) + 1);
+  const int* const p = path(leaf);
+  const Eigen::Index m = P.rows(), stride = P.outerStride();
+  for (int a = 0; a < static_cast<int>(P.cols()); ++a) {
+    double* const Aa = column(p[a]);
+    double scale[6];
+    if (m == 6 || m == 3) {
+      for (Eigen::Index t = 0; t < m; ++t) scale[t] = P(t, a);
+      if (m == 6) add_scaled_rows_prefix<6>(Aa, P.data(), stride, scale, a + 1);
+      if (m == 3) add_scaled_rows_prefix<3>(Aa, P.data(), stride, scale, a + 1);
+      continue;
+    }
+    for (Eigen::Index t = 0; t < m; ++t) add_scaled(Aa, P.row(t).data(), P(t, a), a + 1);
+  }
+}
+
 void BranchSparseMatrix::factorize() {
-  // eliminate from the leaves up: for each ancestor i of k (at depth p), A(j, i) −= a A(j, k) for i
-  // and its ancestors j (the prefix 0 … p of both columns), then L(k, i) = a = A(i, k) / A(k, k)
-  for (int k = size() - 1; k >= 0; --k) {
-    double* const Ak = column(k);
-    const int* const path_k = path(k);
-    const double inv_dk = 1.0 / Ak[depth_[k]];
-    for (int p = depth_[k] - 1; p >= 0; --p) {
-      const double a = Ak[p] * inv_dk;
-      double* const Ai = column(path_k[p]);
-      subtract_scaled_prefix(Ai, Ak, a, p + 1);
-      Ak[p] = a;
+  // Eliminate from the leaves up (RBDA Table 6.3): for each ancestor i of k (at depth p),
+  // A(j, i) −= a A(j, k) for i and its ancestors j (the prefix 0 … p of both columns), then
+  // L(k, i) = a = A(i, k) / A(k, k). A chain block lo … hi first eliminates inside itself; its
+  // columns are then final and share their ancestors, so each ancestor column is updated by all of
+  // them in one pass: one sweep over the target instead of one per column of the block.
+  for (const auto& [lo, hi] : chain_blocks_) {
+    double* columns[kMaxChainBlock];
+    double inv_d[kMaxChainBlock];
+    const int top = depth_[lo];  // ancestors of the block sit at depths 0 … top − 1
+    for (int k = hi; k >= lo; --k) {
+      double* const Ak = column(k);
+      const double inv_dk = 1.0 / Ak[depth_[k]];
+      for (int p = depth_[k] - 1; p >= top; --p) {  // the block's own columns, lo + p − top
+        const double a = Ak[p] * inv_dk;
+        add_scaled(column(lo + p - top), Ak, -a, p + 1);
+        Ak[p] = a;
+      }
+      columns[k - lo] = Ak;
+      inv_d[k - lo] = inv_dk;
+    }
+    const int* const path_lo = path(lo);
+    for (int p = top - 1; p >= 0; --p) {
+      double* const Ai = column(path_lo[p]);
+      double a[kMaxChainBlock];
+      for (int b = 0; b <= hi - lo; ++b) a[b] = columns[b][p] * inv_d[b];
+      switch (hi - lo) {
+        case 0:
+          add_scaled(Ai, columns[0], -a[0], p + 1);
+          break;
+        case 1:
+          subtract_combination_prefix(Ai, columns[0], columns[1], nullptr, a[0], a[1], 0.0, p + 1);
+          break;
+        default:
+          subtract_combination_prefix(Ai, columns[0], columns[1], columns[2], a[0], a[1], a[2],
+                                      p + 1);
+      }
+      for (int b = 0; b <= hi - lo; ++b) columns[b][p] = a[b];
     }
   }
 }
@@ -62,8 +151,7 @@ void BranchSparseMatrix::solve_lt(Eigen::Ref<Eigen::VectorXd> x) const {
   }
 }
 
-void BranchSparseMatrix::solve_lt_columns(
-    Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> X) const {
+void BranchSparseMatrix::solve_lt_columns(Eigen::Ref<RowMajorMatrix> X) const {
   // solve_lt on every column, a row of X at a time (short rows: plain loops)
   const Eigen::Index n = X.cols(), stride = X.outerStride();
   for (int k = size() - 1; k >= 0; --k) {
@@ -73,7 +161,7 @@ void BranchSparseMatrix::solve_lt_columns(
     const int* const path_k = path(k);
     for (int p = 0; p < depth_[k]; ++p) {
       double* const Xj = X.data() + path_k[p] * stride;
-      for (Eigen::Index c = 0; c < n; ++c) Xj[c] -= Lk[p] * Xk[c];
+      add_scaled(Xj, Xk, -Lk[p], static_cast<int>(n));  // distinct rows: p < depth(k)
     }
   }
 }

@@ -2,6 +2,7 @@
 // along each coordinate's root path, and its Lᵀ D L factorization.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,25 +35,32 @@ class BranchSparseMatrix {
   double& diagonal(int k) { return values_[offset_[k] + depth_[k]]; }
   double diagonal(int k) const { return values_[offset_[k] + depth_[k]]; }
 
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
   void set_zero();
+  /// A += PᵀP for rows P that live on leaf's root path: column a of P belongs to path(leaf)[a]
+  /// (P has depth(leaf) + 1 columns). The normal matrix of a task whose rows share one path.
+  void add_path_gram(int leaf, const Eigen::Ref<const RowMajorMatrix>& P);
   /// In place A = Lᵀ D L (RBDA Table 6.3), L unit lower triangular with the same sparsity: L(k, j)
   /// is written over A(j, k), D over the diagonal. A must be positive definite. Allocation-free.
   void factorize();
   /// x ← L⁻ᵀ x, after factorize().
   void solve_lt(Eigen::Ref<Eigen::VectorXd> x) const;
   /// X ← L⁻ᵀ X for all columns of X at once (its rows contiguous); rows that stay zero cost a test.
-  void solve_lt_columns(
-      Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> X) const;
+  void solve_lt_columns(Eigen::Ref<RowMajorMatrix> X) const;
   /// x ← L⁻¹ x, after factorize().
   void solve_l(Eigen::Ref<Eigen::VectorXd> x) const;
   /// The entries as a dense symmetric matrix (zeros off the pattern): for tests and printing.
   Eigen::MatrixXd dense() const;
 
  private:
+  static constexpr int kMaxChainBlock = 3;  // columns factorized together (factorize())
+
   std::vector<int> offset_;  // where column k starts in values_ and path_
   std::vector<int> depth_;
   std::vector<int> path_;
   std::vector<double> values_;
+  std::vector<std::pair<int, int>> chain_blocks_;  // (lo, hi), hi descending: factorize()'s order
 };
 
 }  // namespace core

@@ -7,6 +7,23 @@
 
 namespace ik {
 
+/// The lower triangle of G = J Jᵀ (G square, J with as many rows), summed a column of J at a time:
+/// each is a short contiguous vector, and the zero columns (coordinates off a task's path) are
+/// skipped. The rest of G is left as it was.
+inline void gram_lower(const Eigen::Ref<const Eigen::MatrixXd>& J, Eigen::Ref<Eigen::MatrixXd> G) {
+  const Eigen::Index m = J.rows();
+  for (Eigen::Index j = 0; j < m; ++j) G.col(j).tail(m - j).setZero();
+  for (Eigen::Index c = 0; c < J.cols(); ++c) {
+    const double* const Jc = J.col(c).data();
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const double a = Jc[j];
+      if (a == 0) continue;
+      double* const Gj = G.col(j).data();
+      for (Eigen::Index i = j; i < m; ++i) Gj[i] += a * Jc[i];
+    }
+  }
+}
+
 /// A = L Lᵀ in place on the lower triangle of the square block A. Returns false when A is not
 /// positive definite (a pivot <= 0 or not finite).
 inline bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> A) {

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 
+#include "core/scaled_sum.hpp"
 #include "ik/small_cholesky.hpp"
 #include "ik/solver.hpp"
 
@@ -33,8 +34,7 @@ void Solver::solve_drag_level() {
   auto J1 = w.drag_scaled.topRows(m1);
   J1 = w.drag_jacobian.topRows(m1).array().rowwise() * w.joint_scale.transpose().array();
   auto G = w.drag_gram.topLeftCorner(m1, m1);
-  G.setZero();
-  G.selfadjointView<Eigen::Lower>().rankUpdate(J1);
+  gram_lower(J1, G);
   auto t1 = w.drag_multipliers.head(m1);
   // exact pseudoinverse while every singular value of J̃1 exceeds the threshold
   const double s0 = settings_.top_singular_value;
@@ -53,8 +53,7 @@ void Solver::solve_drag_level() {
     report_.top_rank = m1;
   } else {
     // the factorization overwrote G: form it again for the eigen-decomposition
-    G.setZero();
-    G.selfadjointView<Eigen::Lower>().rankUpdate(J1);
+    gram_lower(J1, G);
     invert_damped_drag_gram(G);
     t1.noalias() = w.drag_damped[m1]->inverse * w.drag_velocity.head(m1);
   }
@@ -118,8 +117,7 @@ void Solver::solve_range_level() {
     }
   }
   auto GR = w.range_gram.topLeftCorner(mR, mR);
-  GR.setZero();
-  GR.selfadjointView<Eigen::Lower>().rankUpdate(SR);
+  gram_lower(SR, GR);
   GR.diagonal().array() += std::max(settings_.range_damping, 1e-12);
   cholesky_in_place(GR);  // SPD: a Gram matrix plus a positive ridge
   cholesky_solve(GR, tR);
@@ -183,8 +181,8 @@ void Solver::solve_pin_level(bool first_round) {
 void Solver::factorize_pin_level() {
   // A = J̃2ᵀ J̃2 + k E, then A = Lᵀ D L, in A's tree pattern alone (core::BranchSparseMatrix: the
   // entries A(j, c) for c and its ancestors j, along c's root path). The rows of one link task
-  // share its root path: they are gathered along the path into a dense block P (its columns
-  // contiguous) and Pᵀ P added one entry per pair of coordinates instead of one per row and pair.
+  // share its root path: they are gathered along the path into a dense block P (its rows
+  // contiguous) and Pᵀ P added a row prefix at a time (BranchSparseMatrix::add_path_gram).
   Workspace& w = ws_;
   const auto J2 = w.pin_scaled.topRows(w.pin_rows);
   core::BranchSparseMatrix& A = w.normal_matrix;
@@ -203,20 +201,7 @@ void Solver::factorize_pin_level() {
     const int m = end - r;
     auto P = w.path_rows.topLeftCorner(m, n);
     for (int a = 0; a < n; ++a) P.col(a) = J2.col(cols[a]).segment(r, m);
-    // A(cols[c], cols[a]) += P(:, c) · P(:, a) for c <= a. cols is the whole root path, root
-    // first, so cols[c] sits at depth c and is entry c of column cols[a]
-    const Eigen::Index p_stride = w.path_rows.outerStride();
-    for (int a = 0; a < n; ++a) {
-      const double* pa = w.path_rows.data() + a * p_stride;
-      double* A_a = A.column(cols[a]);
-      assert(A.depth(cols[a]) == a);
-      for (int c = 0; c <= a; ++c) {
-        const double* pc = w.path_rows.data() + c * p_stride;
-        double dot = 0;
-        for (int t = 0; t < m; ++t) dot += pa[t] * pc[t];
-        A_a[c] += dot;
-      }
-    }
+    if (n > 0) A.add_path_gram(cols[n - 1], P);
     r = end;
   }
   const double k = pin_damping();
@@ -272,13 +257,19 @@ void Solver::solve_pin_normal_equations() {
   const auto dp = w.pin_residual.head(w.pin_rows);
   // b, sparse like A
   w.normal_rhs.setZero();
-  for (int r = 0; r < w.pin_rows; ++r) {
+  for (int r = 0; r < w.pin_rows;) {
     const int support = w.pin_row_support[r];
     if (support < 0) {
       w.normal_rhs[-1 - support] += J2(r, -1 - support) * dp[r];
+      ++r;
       continue;
     }
-    for (const int c : w.link_path[support]) w.normal_rhs[c] += J2(r, c) * dp[r];
+    // a link task's rows at once: one walk along its path, a short column dot per coordinate
+    const int end = task_rows_end(r);
+    for (const int c : w.link_path[support]) {
+      w.normal_rhs[c] += J2.col(c).segment(r, end - r).dot(dp.segment(r, end - r));
+    }
+    r = end;
   }
   const core::BranchSparseMatrix& A = w.normal_matrix;
   Eigen::VectorXd& y = w.x_pin;
@@ -318,7 +309,7 @@ void Solver::solve_pin_normal_equations() {
     if (std::all_of(Zk, Zk + mc, [](double z) { return z == 0; })) continue;
     for (int i = 0; i < mc; ++i) {
       const double dz = Dinv[k] * Zk[i];
-      for (int j = 0; j <= i; ++j) Sc(i, j) += dz * Zk[j];  // the lower triangle Cholesky reads
+      core::add_scaled(&Sc(0, i), Zk, dz, mc);  // the whole column: contiguous, and symmetric
       lambda[i] += dz * h[k];
     }
   }

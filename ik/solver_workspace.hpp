@@ -96,12 +96,13 @@ struct Workspace {
   // A = J̃2ᵀ J̃2 + kE, then its tree-sparse Lᵀ D L, stored along each coordinate's root path
   core::BranchSparseMatrix normal_matrix;
   Eigen::VectorXd pivot_inverse;  // D⁻¹ of that factorization (nv)
-  Eigen::MatrixXd path_rows;      // one task's rows of J̃2 gathered along its link's path (6 x nv)
+  // one task's rows of J̃2 gathered along its link's path, rows contiguous (6 x nv)
+  core::BranchSparseMatrix::RowMajorMatrix path_rows;
   core::BranchSparseMatrix manipulability_pivots;  // Lᵀ D L of J̃2ᵀ J̃2, w = (Π D)^(1/2n)
   Eigen::VectorXd normal_rhs;                      // b = J̃2ᵀ Δṗ (nv)
   Eigen::VectorXd half_solved_rhs;                 // L⁻ᵀ b (nv)
   // Z = L⁻ᵀ Cᵀ, one column per row of C, row-major: the solves update rows (nv x mc)
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> constraint_half;
+  core::BranchSparseMatrix::RowMajorMatrix constraint_half;
   int constraint_columns = 0;        // columns of Z valid for the current factorization
   Eigen::MatrixXd constraint_schur;  // C A⁻¹ Cᵀ = Zᵀ D⁻¹ Z, then its Cholesky factor
   Eigen::VectorXd constraint_multipliers;  // λ = (C A⁻¹ Cᵀ)⁻¹ C A⁻¹ b

@@ -234,6 +234,29 @@ TEST(BranchSparseMatrix, FactorizationAndSolvesMatchTheDenseOnes) {
   }
 }
 
+TEST(BranchSparseMatrix, PathGramAddsTheNormalMatrixOfRowsOnOnePath) {
+  // A += PᵀP for rows on a leaf's root path, as the dense PᵀP of the rows spread over all columns;
+  // 6 and 3 rows (the unrolled counts) and 4 (the general loop)
+  auto models_with_a_figure = models();
+  models_with_a_figure.push_back(fixtures::human48());
+  for (const auto& m : models_with_a_figure) {
+    BranchSparseMatrix A(*m);
+    Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(m->nv, m->nv);
+    for (const int rows : {6, 3, 4}) {
+      for (int leaf = 0; leaf < m->nv; leaf += 5) {
+        const int n = A.depth(leaf) + 1;
+        const BranchSparseMatrix::RowMajorMatrix P =
+            Eigen::MatrixXd::Random(rows, n) + Eigen::MatrixXd::Constant(rows, n, leaf);
+        Eigen::MatrixXd spread = Eigen::MatrixXd::Zero(rows, m->nv);
+        for (int a = 0; a < n; ++a) spread.col(A.path(leaf)[a]) = P.col(a);
+        expected += spread.transpose() * spread;
+        A.add_path_gram(leaf, P);
+      }
+    }
+    EXPECT_LT((A.dense() - expected).norm(), 1e-12 * expected.norm()) << m->name;
+  }
+}
+
 TEST(BranchSparseMatrix, FactorizesAndSolvesWithoutAllocating) {
   const auto m = fixtures::human48();
   Data d(*m);
