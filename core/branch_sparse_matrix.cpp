@@ -172,9 +172,16 @@ void BranchSparseMatrix::solve_l(Eigen::Ref<Eigen::VectorXd> x) const {
   for (int k = 0; k < size(); ++k) {
     const double* const Lk = column(k);
     const int* const path_k = path(k);
-    double sum = 0;
-    for (int p = 0; p < depth_[k]; ++p) sum += Lk[p] * xs[path_k[p]];
-    xs[k] -= sum;
+    // two partial sums: each add waits on the one before it, so one sum is a chain as long as
+    // the path
+    double even = 0, odd = 0;
+    int p = 0;
+    for (; p + 1 < depth_[k]; p += 2) {
+      even += Lk[p] * xs[path_k[p]];
+      odd += Lk[p + 1] * xs[path_k[p + 1]];
+    }
+    if (p < depth_[k]) even += Lk[p] * xs[path_k[p]];
+    xs[k] -= even + odd;
   }
 }
 

@@ -47,12 +47,15 @@ inline bool cholesky_in_place(Eigen::Ref<Eigen::MatrixXd> A) {
 /// B ← L⁻¹ B (forward substitution with the factor's lower triangle).
 inline void forward_substitute(const Eigen::Ref<const Eigen::MatrixXd>& L,
                                Eigen::Ref<Eigen::MatrixXd> B) {
+  // row by row, every column at once: one division per row instead of one per entry (a division
+  // takes as long as a dozen multiply-adds)
   const Eigen::Index m = L.rows();
-  for (Eigen::Index c = 0; c < B.cols(); ++c) {
-    for (Eigen::Index i = 0; i < m; ++i) {
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double inv = 1.0 / L(i, i);
+    for (Eigen::Index c = 0; c < B.cols(); ++c) {
       double s = B(i, c);
       for (Eigen::Index k = 0; k < i; ++k) s -= L(i, k) * B(k, c);
-      B(i, c) = s / L(i, i);
+      B(i, c) = s * inv;
     }
   }
 }
@@ -62,11 +65,12 @@ inline void cholesky_solve(const Eigen::Ref<const Eigen::MatrixXd>& L,
                            Eigen::Ref<Eigen::MatrixXd> B) {
   forward_substitute(L, B);
   const Eigen::Index m = L.rows();
-  for (Eigen::Index c = 0; c < B.cols(); ++c) {
-    for (Eigen::Index i = m - 1; i >= 0; --i) {
+  for (Eigen::Index i = m - 1; i >= 0; --i) {
+    const double inv = 1.0 / L(i, i);
+    for (Eigen::Index c = 0; c < B.cols(); ++c) {
       double s = B(i, c);
       for (Eigen::Index k = i + 1; k < m; ++k) s -= L(k, i) * B(k, c);
-      B(i, c) = s / L(i, i);
+      B(i, c) = s * inv;
     }
   }
 }

@@ -160,14 +160,19 @@ void Solver::solve_pin_level(bool first_round) {
     }
     const int end = task_rows_end(r);
     const int m = end - r;
+    // plain loops over the task's (at most 6) rows: Eigen's dynamic segments cost more to set up
+    double* const dp_r = dp.data() + r;
+    const double* const scale_r = row_scale.data() + r;
     for (const int c : w.link_path[support]) {
+      double* const J2c = &J2(r, c);
       if (first_round) {
         // scaled rows: rows × √weight, columns × 1/√w
-        J2.col(c).segment(r, m) =
-            w.pin_jacobian.col(c).segment(r, m).cwiseProduct(row_scale.segment(r, m)) *
-            w.joint_scale[c];
+        const double* const Jc = &w.pin_jacobian(r, c);
+        const double column_scale = w.joint_scale[c];
+        for (int t = 0; t < m; ++t) J2c[t] = Jc[t] * scale_r[t] * column_scale;
       }
-      dp.segment(r, m) -= J2.col(c).segment(r, m) * w.x[c];
+      const double xc = w.x[c];
+      for (int t = 0; t < m; ++t) dp_r[t] -= J2c[t] * xc;
     }
     r = end;
   }
