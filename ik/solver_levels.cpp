@@ -206,6 +206,8 @@ void Solver::factorize_pin_level() {
     const int m = end - r;
     auto P = w.path_rows.topLeftCorner(m, n);
     for (int a = 0; a < n; ++a) P.col(a) = J2.col(cols[a]).segment(r, m);
+    // cols is the root path of its last coordinate, root first: A's own path for that column
+    assert(n == 0 || std::equal(cols.begin(), cols.end(), A.path(cols[n - 1])));
     if (n > 0) A.add_path_gram(cols[n - 1], P);
     r = end;
   }
