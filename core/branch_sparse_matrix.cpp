@@ -25,16 +25,13 @@ inline void subtract_combination_prefix(double* __restrict__ y,
   for (int j = 0; j < n; ++j) y[j] -= a0 * x0[j] + a1 * x1[j] + a2 * x2[j];
 }
 
-// y[0 … n) += Σ_t a[t] x_t[0 … n), x_t = x + t × stride: M rows of P at once, so each entry of y
-// is loaded and stored once per call instead of once per row
+// y[0 … n) += Σ_t x_t[a] x_t[0 … n), x_t = x + t × stride: M rows of P scaled by their entries
+// in column a, all at once, so each entry of y is loaded and stored once instead of once per row
 template <int M>
-inline void add_scaled_rows_prefix(double* __restrict__ y,
-                                   const double* __restrict__ x,
-                                   Eigen::Index stride,
-                                   const double* a,
-                                   int n) {
+inline void add_scaled_rows_prefix(
+    double* __restrict__ y, const double* __restrict__ x, Eigen::Index stride, int a, int n) {
   double s[M];
-  for (int t = 0; t < M; ++t) s[t] = a[t];
+  for (int t = 0; t < M; ++t) s[t] = x[t * stride + a];
   for (int j = 0; j < n; ++j) {
     double sum = 0;
     for (int t = 0; t < M; ++t) sum += s[t] * x[t * stride + j];
@@ -86,14 +83,13 @@ void BranchSparseMatrix::add_path_gram(int leaf, const Eigen::Ref<const RowMajor
   const Eigen::Index m = P.rows(), stride = P.outerStride();
   for (int a = 0; a < static_cast<int>(P.cols()); ++a) {
     double* const Aa = column(p[a]);
-    double scale[6];
-    if (m == 6 || m == 3) {
-      for (Eigen::Index t = 0; t < m; ++t) scale[t] = P(t, a);
-      if (m == 6) add_scaled_rows_prefix<6>(Aa, P.data(), stride, scale, a + 1);
-      if (m == 3) add_scaled_rows_prefix<3>(Aa, P.data(), stride, scale, a + 1);
-      continue;
+    if (m == 6) {
+      add_scaled_rows_prefix<6>(Aa, P.data(), stride, a, a + 1);
+    } else if (m == 3) {
+      add_scaled_rows_prefix<3>(Aa, P.data(), stride, a, a + 1);
+    } else {
+      for (Eigen::Index t = 0; t < m; ++t) add_scaled(Aa, P.row(t).data(), P(t, a), a + 1);
     }
-    for (Eigen::Index t = 0; t < m; ++t) add_scaled(Aa, P.row(t).data(), P(t, a), a + 1);
   }
 }
 
