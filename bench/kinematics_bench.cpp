@@ -43,19 +43,41 @@ void fk_jacobians(benchmark::State& state, const BenchModel& bm) {
   }
 }
 
-// as above, and every link's dense 6 x nv Jacobian written out (what mj_jacBody per body does)
-void fk_link_jacobians(benchmark::State& state, const BenchModel& bm) {
-  const core::Model& m = *bm.model;
+// as above, and every link's dense 6 x nv Jacobian at its origin (what mj_jacBody per body does)
+void fk_link_jacobians_of(benchmark::State& state,
+                          const core::Model& m,
+                          const std::vector<core::LinkJacobians::Point>& points) {
   core::Data data(m);
   const auto qs = configurations(m);
-  std::vector<core::FrameJacobian> J(m.njoints, core::FrameJacobian(m.nv));
+  core::LinkJacobians J(m, points);
   int k = 0;
   for (auto _ : state) {
     core::compute_joint_jacobians(m, data, qs[k++ % kConfigurations]);
-    for (int i = 1; i < m.njoints; ++i)
-      core::point_jacobian(m, data, i, core::Vector3::Zero(), J[i]);
-    benchmark::DoNotOptimize(J.back().linear.data());
+    J.update(m, data);
+    benchmark::DoNotOptimize(J[J.size() - 1].linear.data());
   }
+  state.counters["links"] = static_cast<double>(points.size());
+}
+
+// every link of the model, massless links between the axes of a multi-axis joint included
+void fk_link_jacobians(benchmark::State& state, const BenchModel& bm) {
+  std::vector<core::LinkJacobians::Point> points;
+  for (int i = 1; i < bm.model->njoints; ++i) points.push_back({i, core::Vector3::Zero()});
+  fk_link_jacobians_of(state, *bm.model, points);
+}
+
+// the links that are the MuJoCo twin's bodies (by name): the same output as mj_jacBody per body
+void fk_body_jacobians(benchmark::State& state, const BenchModel& bm) {
+  bench::MujocoModel mj(bm.mujoco_xml);
+  if (!mj.m) return state.SkipWithError("MuJoCo could not load the model");
+  std::vector<core::LinkJacobians::Point> points;
+  for (int b = 1; b < mj.m->nbody; ++b) {
+    const char* name = mj_id2name(mj.m, mjOBJ_BODY, b);
+    const int link = name ? bm.model->link_index(name) : -1;
+    if (link < 1) return state.SkipWithError("a MuJoCo body has no link of the same name");
+    points.push_back({link, core::Vector3::Zero()});
+  }
+  fk_link_jacobians_of(state, *bm.model, points);
 }
 
 void randomize_mujoco(const mjModel* m, std::vector<std::vector<double>>& qpos) {
@@ -163,6 +185,7 @@ const bool registered = [] {
     benchmark::RegisterBenchmark(("BM_FkLinkJacobians" + n).c_str(), fk_link_jacobians, bm);
     if (!bm.mujoco_xml.empty()) {
       benchmark::RegisterBenchmark(("BM_Fk_MuJoCo" + n).c_str(), fk_mujoco, bm);
+      benchmark::RegisterBenchmark(("BM_FkBodyJacobians" + n).c_str(), fk_body_jacobians, bm);
       benchmark::RegisterBenchmark(("BM_FkJacobians_MuJoCo" + n).c_str(), fk_jacobians_mujoco, bm);
     }
     if (!bm.kdl_urdf.empty()) {

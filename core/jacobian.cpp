@@ -1,5 +1,9 @@
 #include "core/jacobian.hpp"
 
+#include <cassert>
+#include <stdexcept>
+#include <string>
+
 #include "core/kinematics.hpp"
 
 namespace core {
@@ -54,6 +58,20 @@ void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X
   }
 }
 
+namespace {
+// writes the columns on link's root path of the Jacobian of the world point p_W fixed on link,
+// leaving the others as they are
+void write_root_path_columns(
+    const Model& model, const Data& data, int link, const Vector3& p_W, FrameJacobian& J_out) {
+  double* angular = J_out.angular.data();
+  double* linear = J_out.linear.data();
+  for_each_root_path_column(model, data, link, p_W, [&](int c, const Vector3& w, const Vector3& v) {
+    Eigen::Map<Vector3>(angular + 3 * c) = w;
+    Eigen::Map<Vector3>(linear + 3 * c) = v;
+  });
+}
+}  // namespace
+
 void point_jacobian(const Model& model,
                     const Data& data,
                     int link,
@@ -61,15 +79,28 @@ void point_jacobian(const Model& model,
                     FrameJacobian& J_out) {
   J_out.angular.setZero(3, model.nv);
   J_out.linear.setZero(3, model.nv);
-  const Vector3 p_W = data.X_W[link] * p_LinkPoint;
-  for (int j = link; j > 0; j = model.parent[j]) {
-    const int c0 = model.idx_v[j];
-    const int c1 = c0 + joint_nv(model.joint_type[j]);
-    for (int c = c0; c < c1; ++c) {
-      const Vector3 w = data.J.col(c).head<3>();
-      J_out.angular.col(c) = w;
-      J_out.linear.col(c) = data.J.col(c).tail<3>() + w.cross(p_W);
+  write_root_path_columns(model, data, link, data.X_W[link] * p_LinkPoint, J_out);
+}
+
+LinkJacobians::LinkJacobians(const Model& model, std::vector<Point> points)
+    : points_(std::move(points)) {
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    if (points_[k].link < 1 || points_[k].link >= model.njoints) {
+      throw std::invalid_argument("LinkJacobians: point " + std::to_string(k) + " is on link " +
+                                  std::to_string(points_[k].link) +
+                                  ", but the model's links are 1 to " +
+                                  std::to_string(model.njoints - 1));
     }
+  }
+  jacobians_.assign(points_.size(), FrameJacobian(model.nv));
+}
+
+void LinkJacobians::update(const Model& model, const Data& data) {
+  assert(jacobians_.empty() || jacobians_[0].linear.cols() == model.nv);
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    const Point& point = points_[k];
+    write_root_path_columns(model, data, point.link, data.X_W[point.link] * point.p_LinkPoint,
+                            jacobians_[k]);
   }
 }
 

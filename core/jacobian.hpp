@@ -1,6 +1,8 @@
 // Jacobians: joint motion axes in world, and world-aligned Jacobians of points on links.
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "core/data.hpp"
@@ -35,6 +37,35 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data);
 /// The same from the world poses X_W (njoints) into J (6 x nv, sized).
 void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X_W, Matrix6X& J);
 
+/// Calls column(c, ω, v) for each velocity coordinate c on the root path of `link`: ω and v are
+/// the angular velocity and the velocity of the world point p_W (fixed on the link) per unit v_c,
+/// world-aligned, that is column c of the point's Jacobian. Every other column of it is zero.
+/// Requires: compute_joint_jacobians(model, data, q).
+template <typename Column>
+void for_each_root_path_column(
+    const Model& model, const Data& data, int link, const Vector3& p_W, Column&& column) {
+  // the link's last velocity coordinate (fixed joints have none: look further up)
+  int last = -1;
+  for (int j = link; j > 0 && last < 0; j = model.parent[j]) {
+    const int n = joint_nv(model.joint_type[j]);
+    if (n > 0) last = model.idx_v[j] + n - 1;
+  }
+  const double* axes = data.J.data();  // column c: the joint's spatial axis (ω, v_O) at the origin
+  const double px = p_W[0], py = p_W[1], pz = p_W[2];
+  // the ancestors' coordinates as contiguous unbranched runs, leaf to root
+  for (int k = last; k >= 0;) {
+    const int start = model.chain_start_v[k];
+    for (int c = start; c <= k; ++c) {
+      const double* a = axes + 6 * c;
+      // the point moves with v_O + ω × p_W
+      column(c, Vector3(a[0], a[1], a[2]),
+             Vector3(a[3] + (a[1] * pz - a[2] * py), a[4] + (a[2] * px - a[0] * pz),
+                     a[5] + (a[0] * py - a[1] * px)));
+    }
+    k = model.parent_v[start];
+  }
+}
+
 /// World-aligned Jacobian of the point p_LinkPoint (link frame) on `link`. Allocation-free when
 /// J_out is already sized (3 x nv).
 /// Requires: compute_joint_jacobians(model, data, q).
@@ -43,6 +74,33 @@ void point_jacobian(const Model& model,
                     int link,
                     const Vector3& p_LinkPoint,
                     FrameJacobian& J_out);
+
+/// Dense world-aligned Jacobians of a fixed set of points on links, updated together. A link's
+/// Jacobian is nonzero only in the columns of the joints on its root path. Those are the only
+/// columns an update writes: the others are zeroed once, at construction, and never touched
+/// again, so an update costs the points' depths rather than nv per point.
+class LinkJacobians {
+ public:
+  struct Point {
+    int link = 0;
+    Vector3 p_LinkPoint = Vector3::Zero();
+  };
+
+  /// @throws std::invalid_argument naming the point whose link is not a link of the model
+  LinkJacobians(const Model& model, std::vector<Point> points);
+
+  /// Recomputes every point's Jacobian. Allocation-free.
+  /// Requires: compute_joint_jacobians(model, data, q), on the model given at construction.
+  void update(const Model& model, const Data& data);
+
+  int size() const { return static_cast<int>(points_.size()); }
+  const Point& point(int k) const { return points_[k]; }
+  const FrameJacobian& operator[](int k) const { return jacobians_[k]; }
+
+ private:
+  std::vector<Point> points_;
+  std::vector<FrameJacobian> jacobians_;
+};
 
 /// Velocity of a point on a link. Requires: forward_kinematics(model, data, q, v).
 PointMotion point_velocity(const Model& model,

@@ -71,6 +71,45 @@ TEST(Kinematics, VelocitiesAndAccelerationsAgreeWithJacobians) {
   }
 }
 
+TEST(Kinematics, LinkJacobiansMatchPointJacobiansAcrossUpdates) {
+  for (const auto& m : {fixtures::branching_tree(), fixtures::chain(5)}) {
+    std::vector<LinkJacobians::Point> points;
+    for (int link = 1; link < m->njoints; ++link) {
+      points.push_back({link, Vector3(0.02 * link, -0.03, 0.01)});
+      points.push_back({link, Vector3::Zero()});
+    }
+    LinkJacobians jacobians(*m, points);
+    ASSERT_EQ(jacobians.size(), static_cast<int>(points.size()));
+    Data d(*m);
+    FrameJacobian expected(m->nv);
+    // successive configurations: each update must leave exactly the fresh Jacobian, with every
+    // column off the link's root path still zero
+    for (std::uint64_t seed = 0; seed < 4; ++seed) {
+      compute_joint_jacobians(*m, d, random_configuration(*m, seed));
+      jacobians.update(*m, d);
+      for (int k = 0; k < jacobians.size(); ++k) {
+        point_jacobian(*m, d, points[k].link, points[k].p_LinkPoint, expected);
+        EXPECT_EQ(jacobians[k].angular, expected.angular) << "point " << k << ", seed " << seed;
+        EXPECT_EQ(jacobians[k].linear, expected.linear) << "point " << k << ", seed " << seed;
+      }
+    }
+  }
+}
+
+TEST(Kinematics, LinkJacobiansRefuseAPointOffTheModel) {
+  const auto m = fixtures::chain(3);
+  for (int bad : {0, -1, m->njoints}) {
+    try {
+      LinkJacobians jacobians(*m, {{1, Vector3::Zero()}, {bad, Vector3::Zero()}});
+      ADD_FAILURE() << "link " << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("point 1 is on link " + std::to_string(bad)),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(Kinematics, ComJacobianMatchesFiniteDifferences) {
   const auto m = fixtures::branching_tree();
   Data d(*m);
@@ -96,11 +135,13 @@ TEST(Kinematics, PerStepPathDoesNotAllocate) {
   const Eigen::VectorXd q = random_configuration(*m, 1);
   const Eigen::VectorXd v = Eigen::VectorXd::Ones(m->nv);
   FrameJacobian J(m->nv);
+  LinkJacobians all_links(*m, {{1, Vector3::Zero()}, {3, Vector3(0.1, 0, 0)}});
   fixtures::AllocationCounter allocations;
   Eigen::internal::set_is_malloc_allowed(false);
   forward_kinematics(*m, d, q, v, v);
   compute_joint_jacobians(*m, d, q);
   point_jacobian(*m, d, 3, Vector3(0.1, 0, 0), J);
+  all_links.update(*m, d);
   com_jacobian(*m, d);
   const PointMotion jdv = point_jdot_v(*m, d, 3, Vector3::Zero());
   Eigen::internal::set_is_malloc_allowed(true);
