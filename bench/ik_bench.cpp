@@ -89,7 +89,6 @@ void BM_IkStep_Dense(benchmark::State& state) {
   const core::Model& m = *scene.model;
   const int n = m.nv;
   core::Data data(m);
-  core::FrameJacobian point(n);
   const ik::SolverSettings s;
   Eigen::MatrixXd J1(6, n), J2(50, n), W(n, n), S(50, n), A(n, n);
   Eigen::VectorXd v1(6), v2(50), x(n), q(m.nq);
@@ -100,12 +99,10 @@ void BM_IkStep_Dense(benchmark::State& state) {
     for (const auto& e : scene.problem.entries()) {
       if (const auto* t = std::get_if<ik::LinkTask>(&e.task)) {
         if (t->role == ik::kDrag) {
-          ik::fill_link_task(m, data, *t, s.drag_gain, {}, point, J1.middleRows(r1, 6),
-                             v1.segment(r1, 6));
+          ik::fill_link_task(m, data, *t, s.drag_gain, {}, J1.middleRows(r1, 6), v1.segment(r1, 6));
           r1 += 6;
         } else {
-          ik::fill_link_task(m, data, *t, s.pin_gain, {}, point, J2.middleRows(r2, 6),
-                             v2.segment(r2, 6));
+          ik::fill_link_task(m, data, *t, s.pin_gain, {}, J2.middleRows(r2, 6), v2.segment(r2, 6));
           r2 += 6;
         }
       } else if (const auto* j = std::get_if<ik::JointReferenceTask>(&e.task)) {

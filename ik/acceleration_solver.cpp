@@ -45,7 +45,6 @@ AccelerationSolver::AccelerationSolver(const core::Model& model, const Accelerat
       J_(6, model.nv),
       vd_(6),
       jdv_(6),
-      point_(model.nv),
       range_flags_(model.njoints, 0),
       G1_(kMaxDragRows, kMaxDragRows),
       G1inv_(kMaxDragRows, kMaxDragRows),
@@ -253,7 +252,7 @@ void AccelerationSolver::fill_rows(const Problem& problem,
       const double w = frequency_or(
           t->gain, t->role == kDrag ? settings_.drag_frequency : settings_.pin_frequency);
       const ErrorClamp clamp{settings_.max_position_error, settings_.max_orientation_error};
-      fill_link_task(m, data, *t, 0.5 * w, clamp, point_, J_.topRows(rows), vd_.head(rows));
+      fill_link_task(m, data, *t, 0.5 * w, clamp, J_.topRows(rows), vd_.head(rows));
       const core::PointMotion jdv = core::point_jdot_v(m, data, t->link, t->p_LinkPoint);
       int r = 0;
       if (t->mode != TaskMode::kPosition) {

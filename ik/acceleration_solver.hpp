@@ -148,7 +148,6 @@ class AccelerationSolver {
   // row filling scratch
   Eigen::MatrixXd J_;  // one task's rows over all nv coordinates (≤ 6 × nv)
   Eigen::VectorXd vd_, jdv_;
-  core::FrameJacobian point_;
   std::vector<RangeRow> range_rows_;
   std::vector<char> range_flags_;
   int range_violations_ = 0;  // range_rows_ begins with the joints already beyond their ranges

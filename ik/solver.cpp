@@ -184,8 +184,7 @@ void Solver::fill_rows(const Problem& problem, const core::Data& data, const Eig
                                : link_task->role == kPin ? settings_.pin_gain
                                                          : settings_.reference_gain;
       const double K = gain_or(link_task->gain, role_gain);
-      fill_link_task(m, data, *link_task, K, clamp, ws_.point_jacobian, J.middleRows(row, rows),
-                     v.segment(row, rows));
+      fill_link_task(m, data, *link_task, K, clamp, J.middleRows(row, rows), v.segment(row, rows));
       weight = link_task->weight;
     } else if (reference) {
       rows = task_rows(m, *reference);

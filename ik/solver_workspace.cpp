@@ -63,7 +63,6 @@ Workspace::Workspace(const core::Model& model)
       x_range(Eigen::VectorXd::Zero(model.nv)),
       x_pin(Eigen::VectorXd::Zero(model.nv)),
       joint_velocity(Eigen::VectorXd::Zero(model.nv)),
-      point_jacobian(model.nv),
       range_flagged(model.njoints, 0),
       normal_matrix(model),
       pivot_inverse(model.nv),

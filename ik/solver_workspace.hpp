@@ -47,13 +47,12 @@ struct Workspace {
   void reserve(int top_rows, int lower_rows);
 
   // --- all levels; nv entries each ---
-  Eigen::VectorXd joint_scale;         // c_j = 1/√w_j (0 locks joint j), so J̃ = J diag(c)
-  Eigen::VectorXd x;                   // the step being assembled, θ̇ = diag(c) x
-  Eigen::VectorXd x_drag;              // level 1's part of x
-  Eigen::VectorXd x_range;             // level 2's part of x
-  Eigen::VectorXd x_pin;               // level 3's part of x: the SR solution y (eqs. 8.14–8.16)
-  Eigen::VectorXd joint_velocity;      // θ̇ = diag(c) x of the last iteration
-  core::FrameJacobian point_jacobian;  // one link task's point Jacobian (6 x nv)
+  Eigen::VectorXd joint_scale;     // c_j = 1/√w_j (0 locks joint j), so J̃ = J diag(c)
+  Eigen::VectorXd x;               // the step being assembled, θ̇ = diag(c) x
+  Eigen::VectorXd x_drag;          // level 1's part of x
+  Eigen::VectorXd x_range;         // level 2's part of x
+  Eigen::VectorXd x_pin;           // level 3's part of x: the SR solution y (eqs. 8.14–8.16)
+  Eigen::VectorXd joint_velocity;  // θ̇ = diag(c) x of the last iteration
 
   // --- level 1, the drag: x1 = J̃1ᵀ G⁻¹ v1 with G = J̃1 J̃1ᵀ (weighted pseudoinverse, §8.2.4);
   //     m1 rows ---

@@ -1,6 +1,7 @@
 #include "ik/task.hpp"
 
 #include <algorithm>
+#include <cassert>
 
 #include "core/configuration.hpp"
 
@@ -55,23 +56,38 @@ void fill_link_task(const core::Model& model,
                     const LinkTask& t,
                     double K,
                     const ErrorClamp& clamp,
-                    core::FrameJacobian& scratch,
                     Eigen::Ref<Eigen::MatrixXd> J,
                     Eigen::Ref<Eigen::VectorXd> v) {
-  core::point_jacobian(model, data, t.link, t.p_LinkPoint, scratch);
-  int row = 0;
-  if (has_orientation(t.mode)) {
+  const Vector3 p_W = data.X_W[t.link] * t.p_LinkPoint;
+  // the point's Jacobian rows, written straight into J: zero, then the columns of the link's
+  // root path (orientation rows first)
+  const int angular_row = has_orientation(t.mode) ? 0 : -1;
+  const int linear_row = !has_position(t.mode) ? -1 : angular_row < 0 ? 0 : 3;
+  const int rows = mode_rows(t.mode);
+  assert(J.rows() == rows && J.cols() == model.nv);
+  double* const base = J.data();
+  const Eigen::Index stride = J.outerStride();
+  for (Eigen::Index c = 0; c < J.cols(); ++c) {
+    for (int r = 0; r < rows; ++r) base[c * stride + r] = 0.0;
+  }
+  core::for_each_root_path_column(
+      model, data, t.link, p_W, [&](int c, const Vector3& w, const Vector3& pdot) {
+        double* const column = base + c * stride;
+        if (angular_row >= 0) column[0] = w[0], column[1] = w[1], column[2] = w[2];
+        if (linear_row >= 0) {
+          column[linear_row] = pdot[0], column[linear_row + 1] = pdot[1];
+          column[linear_row + 2] = pdot[2];
+        }
+      });
+  if (angular_row >= 0) {
     // ω_d = ω_ref + K log(R_target R_currentᵀ): the world rotation vector to the target
     const Quaternion R_now(data.X_W[t.link].R);
-    J.middleRows<3>(row) = scratch.angular;
     const Vector3 e = core::quaternion_log(t.target_R_W * R_now.conjugate());
-    v.segment<3>(row) = t.angular_velocity_W + K * clamped(e, clamp.orientation);
-    row += 3;
+    v.segment<3>(angular_row) = t.angular_velocity_W + K * clamped(e, clamp.orientation);
   }
-  if (has_position(t.mode)) {
-    const Vector3 p_W = data.X_W[t.link] * t.p_LinkPoint;
-    J.middleRows<3>(row) = scratch.linear;
-    v.segment<3>(row) = t.velocity_W + K * clamped(Vector3(t.target_W - p_W), clamp.position);
+  if (linear_row >= 0) {
+    v.segment<3>(linear_row) =
+        t.velocity_W + K * clamped(Vector3(t.target_W - p_W), clamp.position);
   }
 }
 

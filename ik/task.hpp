@@ -86,7 +86,6 @@ void fill_link_task(const core::Model& model,
                     const LinkTask& t,
                     double K,
                     const ErrorClamp& clamp,
-                    core::FrameJacobian& scratch,
                     Eigen::Ref<Eigen::MatrixXd> J,
                     Eigen::Ref<Eigen::VectorXd> v);
 

@@ -58,9 +58,13 @@ TEST(Task, PoseRowsAreThePointJacobianAndTheFeedbackLaw) {
                       .angular_velocity_W = Vector3(-0.3, 0.1, 0.2),
                       .mode = TaskMode::kPose};
   const double K = 7.0;
-  Eigen::MatrixXd J(6, t.model->nv);
+  // rows 2..7 of a larger matrix full of stale entries, as in the solver's stacked Jacobian
+  Eigen::MatrixXd stacked = Eigen::MatrixXd::Constant(9, t.model->nv, 7.0);
   Eigen::VectorXd v(6);
-  fill_link_task(*t.model, t.data, task, K, ErrorClamp{}, t.scratch, J, v);
+  fill_link_task(*t.model, t.data, task, K, ErrorClamp{}, stacked.middleRows(2, 6), v);
+  const Eigen::MatrixXd J = stacked.middleRows(2, 6);
+  EXPECT_TRUE((stacked.topRows(2).array() == 7.0).all());
+  EXPECT_TRUE((stacked.bottomRows(1).array() == 7.0).all());
 
   core::FrameJacobian expected(t.model->nv);
   core::point_jacobian(*t.model, t.data, hand, point, expected);
@@ -79,12 +83,24 @@ TEST(Task, OrientationModeFillsOnlyTheAngularRows) {
                       .target_W = Vector3(5, 5, 5),  // ignored without position rows
                       .target_R_W = Quaternion(t.data.X_W[wrist].R),
                       .mode = TaskMode::kOrientation};
-  Eigen::MatrixXd J(3, t.model->nv);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Constant(3, t.model->nv, 7.0);  // stale entries
   Eigen::VectorXd v(3);
-  fill_link_task(*t.model, t.data, task, 40.0, ErrorClamp{}, t.scratch, J, v);
+  fill_link_task(*t.model, t.data, task, 40.0, ErrorClamp{}, J, v);
   core::point_jacobian(*t.model, t.data, wrist, Vector3::Zero(), t.scratch);
   EXPECT_TRUE(J.isApprox(Eigen::MatrixXd(t.scratch.angular), 1e-14));
   EXPECT_LT(v.norm(), 1e-12);  // already at the target orientation
+}
+
+TEST(Task, PositionModeFillsOnlyTheLinearRows) {
+  Tree t;
+  const int hand = t.link("hand");
+  const Vector3 point(0.01, 0.02, -0.03);
+  const LinkTask task{.link = hand, .p_LinkPoint = point, .target_W = Vector3(0.1, 0.2, 0.3)};
+  Eigen::MatrixXd J = Eigen::MatrixXd::Constant(3, t.model->nv, 7.0);  // stale entries
+  Eigen::VectorXd v(3);
+  fill_link_task(*t.model, t.data, task, 5.0, ErrorClamp{}, J, v);
+  core::point_jacobian(*t.model, t.data, hand, point, t.scratch);
+  EXPECT_TRUE(J.isApprox(Eigen::MatrixXd(t.scratch.linear), 1e-14));
 }
 
 TEST(Task, FeedbackErrorIsClampedPerStep) {
@@ -97,7 +113,7 @@ TEST(Task, FeedbackErrorIsClampedPerStep) {
   const ErrorClamp clamp{.position = 0.05, .orientation = 0.5};
   Eigen::MatrixXd J(3, t.model->nv);
   Eigen::VectorXd v(3);
-  fill_link_task(*t.model, t.data, task, K, clamp, t.scratch, J, v);
+  fill_link_task(*t.model, t.data, task, K, clamp, J, v);
   // the error is shortened to 0.05 m along the same direction
   EXPECT_NEAR(v.norm(), K * 0.05, 1e-12);
   EXPECT_NEAR(v.normalized().dot(far.normalized()), 1.0, 1e-12);
@@ -112,7 +128,7 @@ TEST(Task, LinkFeedbackShrinksTheErrorByOneMinusKh) {
   const double K = 10.0, h = 1e-4;
   Eigen::MatrixXd J(3, t.model->nv);
   Eigen::VectorXd v(3);
-  fill_link_task(*t.model, t.data, task, K, ErrorClamp{}, t.scratch, J, v);
+  fill_link_task(*t.model, t.data, task, K, ErrorClamp{}, J, v);
   const Eigen::VectorXd qdot = J.transpose() * (J * J.transpose()).llt().solve(v);
   const Eigen::VectorXd q1 = core::integrate(*t.model, t.q, qdot, h);
   core::forward_kinematics(*t.model, t.data, q1);
