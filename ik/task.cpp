@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <type_traits>
 
 #include "core/configuration.hpp"
 
@@ -67,8 +68,17 @@ void fill_link_task(const core::Model& model,
   assert(J.rows() == rows && J.cols() == model.nv);
   double* const base = J.data();
   const Eigen::Index stride = J.outerStride();
-  for (Eigen::Index c = 0; c < J.cols(); ++c) {
-    for (int r = 0; r < rows; ++r) base[c * stride + r] = 0.0;
+  // a fixed count per column: a runtime one becomes a string store, slow to start for 6 entries
+  const auto zero_columns = [&]<int Rows>(std::integral_constant<int, Rows>) {
+    for (Eigen::Index c = 0; c < J.cols(); ++c) {
+      double* const column = base + c * stride;
+      for (int r = 0; r < Rows; ++r) column[r] = 0.0;
+    }
+  };
+  if (rows == 6) {
+    zero_columns(std::integral_constant<int, 6>{});
+  } else {
+    zero_columns(std::integral_constant<int, 3>{});
   }
   core::for_each_root_path_column(
       model, data, t.link, p_W, [&](int c, const Vector3& w, const Vector3& pdot) {
