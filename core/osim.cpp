@@ -11,21 +11,21 @@ namespace core {
 void handle_jacobian(const Model& model,
                      const Data& data,
                      const std::vector<Handle>& handles,
-                     Eigen::MatrixXd& J,
-                     FrameJacobian& scratch) {
+                     Eigen::MatrixXd& J) {
   int m = 0;
   for (const Handle& h : handles) m += h.rows();
   if (J.rows() != m || J.cols() != model.nv) J.resize(m, model.nv);
-  if (scratch.linear.cols() != model.nv) scratch = FrameJacobian(model.nv);
+  J.setZero();
   int row = 0;
   for (const Handle& h : handles) {
-    point_jacobian(model, data, h.link, h.p_LinkPoint, scratch);
-    if (h.with_orientation) {
-      J.middleRows<3>(row) = scratch.angular;
-      row += 3;
-    }
-    J.middleRows<3>(row) = scratch.linear;
-    row += 3;
+    // only the columns on the link's root path are nonzero: written straight into the rows
+    const int angular_row = row, linear_row = h.with_orientation ? row + 3 : row;
+    for_each_root_path_column(model, data, h.link, data.X_W[h.link] * h.p_LinkPoint,
+                              [&](int c, const Vector3& w, const Vector3& v) {
+                                if (h.with_orientation) J.col(c).segment<3>(angular_row) = w;
+                                J.col(c).segment<3>(linear_row) = v;
+                              });
+    row += h.rows();
   }
 }
 
@@ -34,13 +34,17 @@ void inverse_operational_inertia(const Model& model,
                                  const std::vector<Handle>& handles,
                                  OsimWorkspace& ws,
                                  Eigen::MatrixXd& Phi) {
-  handle_jacobian(model, data, handles, ws.J, ws.point);
+  handle_jacobian(model, data, handles, ws.J);
   const Eigen::Index m = ws.J.rows();
   if (ws.Y.rows() != model.nv || ws.Y.cols() != m) ws.Y.resize(model.nv, m);
+  // Φ = J H⁻¹ Jᵀ = Yᵀ Y with Y = D^-1/2 L⁻ᵀ Jᵀ
+  Eigen::VectorXd& scale = ws.inverse_sqrt_pivots;
+  if (scale.size() != model.nv) scale.resize(model.nv);
+  for (int k = 0; k < model.nv; ++k) scale[k] = 1.0 / std::sqrt(data.LTDL(k, k));
   ws.Y = ws.J.transpose();
   for (Eigen::Index r = 0; r < m; ++r) {
     solve_mass_matrix_lt(model, data, ws.Y.col(r));
-    for (int k = 0; k < model.nv; ++k) ws.Y(k, r) /= std::sqrt(data.LTDL(k, k));
+    ws.Y.col(r).array() *= scale.array();
   }
   if (Phi.rows() != m || Phi.cols() != m) Phi.resize(m, m);
   Phi.noalias() = ws.Y.transpose() * ws.Y;
@@ -69,7 +73,7 @@ void floating_base_split(const Model& model,
                          FloatingBaseSplit& out) {
   const int nv = model.nv;
   const int nq_joints = nv - 6;
-  handle_jacobian(model, data, handles, out.J, out.point);  // resizes only on a new size
+  handle_jacobian(model, data, handles, out.J);  // resizes only on a new size
   const int m = static_cast<int>(out.J.rows());
   out.H_bb = data.M.topLeftCorner<6, 6>();
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> Hbb(out.H_bb);

@@ -22,9 +22,9 @@ struct Handle {
 
 /// Scratch space of the operational-space functions; sized on first use, reused afterwards.
 struct OsimWorkspace {
-  Eigen::MatrixXd J;  // stacked handle Jacobian (m x nv)
-  Eigen::MatrixXd Y;  // L⁻ᵀ Jᵀ scaled by D^-1/2 (nv x m)
-  FrameJacobian point;
+  Eigen::MatrixXd J;                    // stacked handle Jacobian (m x nv)
+  Eigen::MatrixXd Y;                    // L⁻ᵀ Jᵀ scaled by D^-1/2 (nv x m)
+  Eigen::VectorXd inverse_sqrt_pivots;  // D^-1/2 of H = Lᵀ D L (nv)
 };
 
 /// Stacked task Jacobian of the handles, rows in handle order ([angular; linear] for 6-D).
@@ -32,8 +32,7 @@ struct OsimWorkspace {
 void handle_jacobian(const Model& model,
                      const Data& data,
                      const std::vector<Handle>& handles,
-                     Eigen::MatrixXd& J,
-                     FrameJacobian& scratch);
+                     Eigen::MatrixXd& J);
 
 /// Extended inverse operational-space inertia Φ = J H⁻¹ Jᵀ for all handle pairs (block ij is
 /// Φ_ij), computed with the tree-sparse factorization H = Lᵀ D L as Φ = Zᵀ Z with
@@ -66,7 +65,6 @@ struct FloatingBaseSplit {
   Eigen::MatrixXd J;    // stacked handle Jacobian [J_b J_q] (m x nv)
   Eigen::MatrixXd J_b;  // its root columns (m x 6)
   Eigen::MatrixXd X;    // J_b H_bb⁻¹ (m x 6)
-  FrameJacobian point;  // one handle's point Jacobian
   // H_bb⁻¹ J_bᵀ (6 x m), row-major like the right-hand side J_bᵀ
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> X_t;
 };

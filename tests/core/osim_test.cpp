@@ -24,6 +24,29 @@ std::vector<Handle> tree_handles(const Model& m) {
           {m.link_index("base"), Vector3(0.1, 0, 0), true}};
 }
 
+TEST(Osim, HandleJacobianStacksThePointJacobians) {
+  const auto m = fixtures::branching_tree();
+  Data d(*m);
+  const auto handles = tree_handles(*m);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Constant(15, m->nv, 7.0);  // stale entries, right size
+  FrameJacobian expected(m->nv);
+  for (std::uint64_t seed = 0; seed < 3; ++seed) {
+    compute_joint_jacobians(*m, d, random_configuration(*m, seed));
+    handle_jacobian(*m, d, handles, J);
+    ASSERT_EQ(J.rows(), 15);
+    int row = 0;
+    for (const Handle& h : handles) {
+      point_jacobian(*m, d, h.link, h.p_LinkPoint, expected);
+      if (h.with_orientation) {
+        EXPECT_EQ(Eigen::MatrixXd(J.middleRows(row, 3)), Eigen::MatrixXd(expected.angular));
+        row += 3;
+      }
+      EXPECT_EQ(Eigen::MatrixXd(J.middleRows(row, 3)), Eigen::MatrixXd(expected.linear));
+      row += 3;
+    }
+  }
+}
+
 TEST(Osim, SparsePhiEqualsDenseJHinvJt) {
   const auto m = fixtures::branching_tree();
   Data d(*m);
@@ -82,7 +105,7 @@ TEST(Osim, FloatingBaseSplitIdentity) {
   floating_base_split(*m, d, handles, b, split);
   OsimWorkspace ws;
   Eigen::MatrixXd J;
-  handle_jacobian(*m, d, handles, J, ws.point);
+  handle_jacobian(*m, d, handles, J);
   const Eigen::MatrixXd HinvJt = H.llt().solve(J.transpose());
   const Eigen::MatrixXd lhs = J * HinvJt;
   const Eigen::MatrixXd rhs = split.Phi_lock + split.Gamma * HinvJt.bottomRows(m->nv - 6);
