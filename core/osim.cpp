@@ -47,7 +47,9 @@ void inverse_operational_inertia(const Model& model,
     ws.Y.col(r).array() *= scale.array();
   }
   if (Phi.rows() != m || Phi.cols() != m) Phi.resize(m, m);
-  Phi.noalias() = ws.Y.transpose() * ws.Y;
+  // Φ is symmetric: the lower triangle's products only, then mirrored
+  Phi.triangularView<Eigen::Lower>() = ws.Y.transpose() * ws.Y;
+  Phi.triangularView<Eigen::StrictlyUpper>() = Phi.transpose();
 }
 
 int operational_inertia(const Eigen::MatrixXd& Phi, Eigen::MatrixXd& Lambda, double rel_tol) {
