@@ -200,6 +200,32 @@ void solve_mass_matrix(const Model& model, const Data& data, Eigen::Ref<Eigen::V
   ltdl_solve(model, data.LTDL, b);
 }
 
+void solve_mass_matrix_lt_on_path(const Model& model,
+                                  const Data& data,
+                                  int last,
+                                  Eigen::Ref<Eigen::MatrixXd> X) {
+  // ltdl_solve_lt restricted to the path: x_k is zero off it, and k only updates its ancestors,
+  // which are on it too. Coordinates go leaf to root, as there.
+  const Eigen::Index w = X.cols(), x_stride = X.outerStride();
+  double* const x = X.data();
+  const double* const L = data.LTDL.data();
+  const Eigen::Index l_stride = data.LTDL.outerStride();
+  for_each_run_from(model, last, [&](int start, int n) {
+    for (int k = start + n - 1; k >= start; --k) {
+      if (model.parent_v[k] < 0) continue;
+      const double* const Lk = L + k * l_stride;  // Lk[j] = L(k, j) for the ancestors j of k
+      for (Eigen::Index t = 0; t < w; ++t) {
+        const double xk = x[t * x_stride + k];
+        if (xk == 0) continue;
+        double* const xt = x + t * x_stride;
+        for_each_run_from(model, model.parent_v[k], [&](int c, int m) {
+          for (int j = c; j < c + m; ++j) xt[j] -= xk * Lk[j];
+        });
+      }
+    }
+  });
+}
+
 void solve_mass_matrix_columns(const Model& model,
                                const Data& data,
                                Eigen::Ref<Eigen::MatrixXd> B) {

@@ -48,6 +48,15 @@ void solve_mass_matrix(const Model& model, const Data& data, Eigen::Ref<Eigen::V
 /// The same for every column of B.
 void solve_mass_matrix_columns(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> B);
 
+/// X ← L⁻ᵀ X in place for columns that are zero off the root path ending at coordinate `last`
+/// (Model::path_last_v): the columns of Jᵀ for one point's Jacobian rows. Walks that path alone,
+/// each entry of L loaded once for all the columns. Allocation-free.
+/// Requires: factorize_mass_matrix(model, data).
+void solve_mass_matrix_lt_on_path(const Model& model,
+                                  const Data& data,
+                                  int last,
+                                  Eigen::Ref<Eigen::MatrixXd> X);
+
 /// y = L⁻ᵀ x in place (x is overwritten): the half solve used for J H⁻¹ Jᵀ = Yᵀ D⁻¹ Y.
 void solve_mass_matrix_lt(const Model& model, const Data& data, Eigen::Ref<Eigen::VectorXd> x);
 

@@ -44,12 +44,7 @@ void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X
 template <typename Column>
 void for_each_root_path_column(
     const Model& model, const Data& data, int link, const Vector3& p_W, Column&& column) {
-  // the link's last velocity coordinate (fixed joints have none: look further up)
-  int last = -1;
-  for (int j = link; j > 0 && last < 0; j = model.parent[j]) {
-    const int n = joint_nv(model.joint_type[j]);
-    if (n > 0) last = model.idx_v[j] + n - 1;
-  }
+  const int last = model.path_last_v(link);
   const double* axes = data.J.data();  // column c: the joint's spatial axis (ω, v_O) at the origin
   const double px = p_W[0], py = p_W[1], pz = p_W[2];
   // the ancestors' coordinates as contiguous unbranched runs, leaf to root

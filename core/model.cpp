@@ -64,6 +64,14 @@ int Model::link_index(std::string_view link) const {
   return -1;
 }
 
+int Model::path_last_v(int link) const {
+  for (int j = link; j > 0; j = parent[j]) {
+    const int n = joint_nv(joint_type[j]);
+    if (n > 0) return idx_v[j] + n - 1;
+  }
+  return -1;
+}
+
 int Model::joint_index(std::string_view joint) const {
   for (int i = 1; i < njoints; ++i) {
     if (joint_name[i] == joint) return i;

@@ -156,6 +156,10 @@ struct Model {
   int link_index(std::string_view link) const;
   /// Index of the joint with this joint name, or -1.
   int joint_index(std::string_view joint) const;
+  /// The last velocity coordinate on the root path of `link`: its joint's last, or the nearest
+  /// ancestor's when its joint has none (fixed); -1 when no joint on the path moves. The path's
+  /// coordinates are this one and its ancestors (parent_v).
+  int path_last_v(int link) const;
   double total_mass() const;
   int nlinks() const { return njoints - 1; }
   bool operator==(const Model& o) const;

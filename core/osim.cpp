@@ -42,10 +42,14 @@ void inverse_operational_inertia(const Model& model,
   if (scale.size() != model.nv) scale.resize(model.nv);
   for (int k = 0; k < model.nv; ++k) scale[k] = 1.0 / std::sqrt(data.LTDL(k, k));
   ws.Y = ws.J.transpose();
-  for (Eigen::Index r = 0; r < m; ++r) {
-    solve_mass_matrix_lt(model, data, ws.Y.col(r));
-    ws.Y.col(r).array() *= scale.array();
+  // a handle's columns of Jᵀ, and so of Y, are zero off its link's root path
+  int r = 0;
+  for (const Handle& h : handles) {
+    solve_mass_matrix_lt_on_path(model, data, model.path_last_v(h.link),
+                                 ws.Y.middleCols(r, h.rows()));
+    r += h.rows();
   }
+  for (Eigen::Index c = 0; c < m; ++c) ws.Y.col(c).array() *= scale.array();
   if (Phi.rows() != m || Phi.cols() != m) Phi.resize(m, m);
   // Φ is symmetric: the lower triangle's products only, then mirrored
   Phi.triangularView<Eigen::Lower>() = ws.Y.transpose() * ws.Y;

@@ -121,6 +121,28 @@ TEST(Aba, EqualsInverseInertiaTimesTauMinusBias) {
   }
 }
 
+TEST(Ltdl, HalfSolveOnAPathMatchesTheFullHalfSolve) {
+  for (const auto& m : models()) {
+    Data d(*m);
+    const Eigen::VectorXd q = random_configuration(*m, 6);
+    crba(*m, d, q);
+    factorize_mass_matrix(*m, d);
+    compute_joint_jacobians(*m, d, q);
+    FrameJacobian J(m->nv);
+    for (int link = 1; link < m->njoints; ++link) {
+      point_jacobian(*m, d, link, Vector3(0.02, -0.01, 0.03), J);
+      // Jᵀ's six columns are zero off the link's root path
+      Eigen::MatrixXd X(m->nv, 6);
+      X << J.angular.transpose(), J.linear.transpose();
+      Eigen::MatrixXd expected = X;
+      for (int c = 0; c < 6; ++c) solve_mass_matrix_lt(*m, d, expected.col(c));
+      solve_mass_matrix_lt_on_path(*m, d, m->path_last_v(link), X);
+      EXPECT_LT((X - expected).norm(), 1e-13 * (1 + expected.norm()))
+          << m->name << " link " << link;
+    }
+  }
+}
+
 TEST(Ltdl, SparseSolveAgreesWithDenseCholesky) {
   for (const auto& m : models()) {
     Data d(*m);
