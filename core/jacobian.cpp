@@ -82,6 +82,24 @@ void point_jacobian(const Model& model,
   write_root_path_columns(model, data, link, data.X_W[link] * p_LinkPoint, J_out);
 }
 
+void write_point_jacobian_rows(const Model& model,
+                               const Data& data,
+                               int link,
+                               const Vector3& p_W,
+                               int angular_row,
+                               int linear_row,
+                               Eigen::Ref<Eigen::MatrixXd> J) {
+  double* const base = J.data();
+  const Eigen::Index stride = J.outerStride();
+  for_each_root_path_column(model, data, link, p_W, [&](int c, const Vector3& w, const Vector3& v) {
+    double* const column = base + c * stride;
+    if (angular_row >= 0)
+      column[angular_row] = w[0], column[angular_row + 1] = w[1], column[angular_row + 2] = w[2];
+    if (linear_row >= 0)
+      column[linear_row] = v[0], column[linear_row + 1] = v[1], column[linear_row + 2] = v[2];
+  });
+}
+
 LinkJacobians::LinkJacobians(const Model& model, std::vector<Point> points)
     : points_(std::move(points)) {
   for (std::size_t k = 0; k < points_.size(); ++k) {

@@ -61,6 +61,18 @@ void for_each_root_path_column(
   }
 }
 
+/// Writes the root-path columns of the world point p_W's Jacobian into rows of a stacked matrix:
+/// its 3 angular rows from angular_row, its 3 linear rows from linear_row (-1: not wanted). The
+/// rows' other columns are left as they are: the caller zeroes them.
+/// Requires: compute_joint_jacobians(model, data, q).
+void write_point_jacobian_rows(const Model& model,
+                               const Data& data,
+                               int link,
+                               const Vector3& p_W,
+                               int angular_row,
+                               int linear_row,
+                               Eigen::Ref<Eigen::MatrixXd> J);
+
 /// World-aligned Jacobian of the point p_LinkPoint (link frame) on `link`. Allocation-free when
 /// J_out is already sized (3 x nv).
 /// Requires: compute_joint_jacobians(model, data, q).

@@ -19,12 +19,8 @@ void handle_jacobian(const Model& model,
   int row = 0;
   for (const Handle& h : handles) {
     // only the columns on the link's root path are nonzero: written straight into the rows
-    const int angular_row = row, linear_row = h.with_orientation ? row + 3 : row;
-    for_each_root_path_column(model, data, h.link, data.X_W[h.link] * h.p_LinkPoint,
-                              [&](int c, const Vector3& w, const Vector3& v) {
-                                if (h.with_orientation) J.col(c).segment<3>(angular_row) = w;
-                                J.col(c).segment<3>(linear_row) = v;
-                              });
+    write_point_jacobian_rows(model, data, h.link, data.X_W[h.link] * h.p_LinkPoint,
+                              h.with_orientation ? row : -1, h.with_orientation ? row + 3 : row, J);
     row += h.rows();
   }
 }

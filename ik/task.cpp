@@ -80,15 +80,7 @@ void fill_link_task(const core::Model& model,
   } else {
     zero_columns(std::integral_constant<int, 3>{});
   }
-  core::for_each_root_path_column(
-      model, data, t.link, p_W, [&](int c, const Vector3& w, const Vector3& pdot) {
-        double* const column = base + c * stride;
-        if (angular_row >= 0) column[0] = w[0], column[1] = w[1], column[2] = w[2];
-        if (linear_row >= 0) {
-          column[linear_row] = pdot[0], column[linear_row + 1] = pdot[1];
-          column[linear_row + 2] = pdot[2];
-        }
-      });
+  core::write_point_jacobian_rows(model, data, t.link, p_W, angular_row, linear_row, J);
   if (angular_row >= 0) {
     // ω_d = ω_ref + K log(R_target R_currentᵀ): the world rotation vector to the target
     const Quaternion R_now(data.X_W[t.link].R);
