@@ -51,6 +51,7 @@ BranchSparseMatrix::BranchSparseMatrix(const Model& model) : offset_(model.nv), 
   }
   path_.resize(total);
   values_.assign(total, 0.0);
+  coupled_.assign(model.nv, 1);
   for (int k = 0; k < model.nv; ++k) {
     for (int j = k; j >= 0; j = model.parent_v[j]) path_[offset_[k] + depth_[j]] = j;
   }
@@ -98,39 +99,51 @@ void BranchSparseMatrix::factorize() {
   // A(j, i) −= a A(j, k) for i and its ancestors j (the prefix 0 … p of both columns), then
   // L(k, i) = a = A(i, k) / A(k, k). A chain block lo … hi first eliminates inside itself; its
   // columns are then final and share their ancestors, so each ancestor column is updated by all of
-  // them in one pass: one sweep over the target instead of one per column of the block.
+  // them in one pass: one sweep over the target instead of one per column of the block. A column
+  // with no entry above its diagonal has a = 0 for every ancestor: it takes no part.
   for (const auto& [lo, hi] : chain_blocks_) {
-    double* columns[kMaxChainBlock];
-    double inv_d[kMaxChainBlock];
-    const int top = depth_[lo];  // ancestors of the block sit at depths 0 … top − 1
+    const int top = depth_[lo];        // ancestors of the block sit at depths 0 … top − 1
+    double inv_pivot[kMaxChainBlock];  // 1 / A(k, k) for k = lo … hi
     for (int k = hi; k >= lo; --k) {
       double* const Ak = column(k);
-      const double inv_dk = 1.0 / Ak[depth_[k]];
-      for (int p = depth_[k] - 1; p >= top; --p) {  // the block's own columns, lo + p − top
+      const int dk = depth_[k];
+      coupled_[k] = std::any_of(Ak, Ak + dk, [](double x) { return x != 0; });
+      if (!coupled_[k]) continue;
+      const double inv_dk = inv_pivot[k - lo] = 1.0 / Ak[dk];
+      for (int p = dk - 1; p >= top; --p) {  // the block's own columns, lo + p − top
         const double a = Ak[p] * inv_dk;
         add_scaled(column(lo + p - top), Ak, -a, p + 1);
         Ak[p] = a;
       }
-      columns[k - lo] = Ak;
-      inv_d[k - lo] = inv_dk;
     }
+    // the block's coupled columns, root end first (the order of the sums below)
+    double* columns[kMaxChainBlock];
+    double inv_d[kMaxChainBlock];
+    int coupled_columns = 0;
+    for (int k = lo; k <= hi; ++k) {
+      if (!coupled_[k]) continue;
+      columns[coupled_columns] = column(k);
+      inv_d[coupled_columns] = inv_pivot[k - lo];
+      ++coupled_columns;
+    }
+    if (coupled_columns == 0) continue;
     const int* const path_lo = path(lo);
     for (int p = top - 1; p >= 0; --p) {
       double* const Ai = column(path_lo[p]);
       double a[kMaxChainBlock];
-      for (int b = 0; b <= hi - lo; ++b) a[b] = columns[b][p] * inv_d[b];
-      switch (hi - lo) {
-        case 0:
+      for (int b = 0; b < coupled_columns; ++b) a[b] = columns[b][p] * inv_d[b];
+      switch (coupled_columns) {
+        case 1:
           add_scaled(Ai, columns[0], -a[0], p + 1);
           break;
-        case 1:
+        case 2:
           subtract_combination_prefix(Ai, columns[0], columns[1], nullptr, a[0], a[1], 0.0, p + 1);
           break;
         default:
           subtract_combination_prefix(Ai, columns[0], columns[1], columns[2], a[0], a[1], a[2],
                                       p + 1);
       }
-      for (int b = 0; b <= hi - lo; ++b) columns[b][p] = a[b];
+      for (int b = 0; b < coupled_columns; ++b) columns[b][p] = a[b];
     }
   }
 }
@@ -140,7 +153,8 @@ void BranchSparseMatrix::solve_lt(Eigen::Ref<Eigen::VectorXd> x) const {
   double* const xs = x.data();
   for (int k = size() - 1; k >= 0; --k) {
     const double xk = xs[k];
-    if (xk == 0) continue;  // a zero entry changes nothing: sparse right-hand sides cost little
+    // a zero entry or an uncoupled column changes nothing: sparse right-hand sides cost little
+    if (xk == 0 || !coupled_[k]) continue;
     const double* const Lk = column(k);
     const int* const path_k = path(k);
     for (int p = 0; p < depth_[k]; ++p) xs[path_k[p]] -= xk * Lk[p];
@@ -151,6 +165,7 @@ void BranchSparseMatrix::solve_lt_columns(Eigen::Ref<RowMajorMatrix> X) const {
   // solve_lt on every column, a row of X at a time (short rows: plain loops)
   const Eigen::Index n = X.cols(), stride = X.outerStride();
   for (int k = size() - 1; k >= 0; --k) {
+    if (!coupled_[k]) continue;
     const double* const Xk = X.data() + k * stride;
     if (std::all_of(Xk, Xk + n, [](double x) { return x == 0; })) continue;
     const double* const Lk = column(k);
@@ -166,6 +181,7 @@ void BranchSparseMatrix::solve_l(Eigen::Ref<Eigen::VectorXd> x) const {
   // forward substitution with L: x_k −= Σ L(k, j) x_j over the ancestors j, root first
   double* const xs = x.data();
   for (int k = 0; k < size(); ++k) {
+    if (!coupled_[k]) continue;
     const double* const Lk = column(k);
     const int* const path_k = path(k);
     // two partial sums: each add waits on the one before it, so one sum is a chain as long as

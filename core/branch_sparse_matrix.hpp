@@ -43,7 +43,12 @@ class BranchSparseMatrix {
   void add_path_gram(int leaf, const Eigen::Ref<const RowMajorMatrix>& P);
   /// In place A = Lᵀ D L (RBDA Table 6.3), L unit lower triangular with the same sparsity: L(k, j)
   /// is written over A(j, k), D over the diagonal. A must be positive definite. Allocation-free.
+  /// A column whose entries above the diagonal are all zero when it is eliminated (a coordinate
+  /// no row of a normal matrix touches beyond its diagonal) updates nothing: it and its share of
+  /// the solves below are skipped.
   void factorize();
+  /// After factorize(): whether L(k, j) is nonzero for some ancestor j of k.
+  bool coupled(int k) const { return coupled_[k] != 0; }
   /// x ← L⁻ᵀ x, after factorize().
   void solve_lt(Eigen::Ref<Eigen::VectorXd> x) const;
   /// X ← L⁻ᵀ X for all columns of X at once (its rows contiguous); rows that stay zero cost a test.
@@ -60,6 +65,7 @@ class BranchSparseMatrix {
   std::vector<int> depth_;
   std::vector<int> path_;
   std::vector<double> values_;
+  std::vector<char> coupled_;  // per column, set by factorize(): L(k, ·) has a nonzero entry
   std::vector<std::pair<int, int>> chain_blocks_;  // (lo, hi), hi descending: factorize()'s order
 };
 

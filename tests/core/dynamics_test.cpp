@@ -282,6 +282,74 @@ TEST(BranchSparseMatrix, PathGramAddsTheNormalMatrixOfRowsOnOnePath) {
   }
 }
 
+TEST(BranchSparseMatrix, ColumnsNoRowTouchesAreSkippedAndTheSolvesStayExact) {
+  // A normal matrix of rows on a few paths plus a ridge: coordinates off every path have only
+  // their diagonal, take no part in the elimination and are skipped by the solves. Leaves in the
+  // middle of a chain leave a chain block half coupled (its root end on the path, its leaf end
+  // off it).
+  std::vector<std::pair<std::shared_ptr<const Model>, std::vector<int>>> cases = {
+      {fixtures::chain(7), {2}},
+      {fixtures::chain(5), {0}},
+      {fixtures::branching_tree(), {1}},
+  };
+  const auto human = fixtures::human48();
+  cases.push_back(
+      {human,
+       {human->idx_v[human->link_index("l_foot")], human->idx_v[human->link_index("head")]}});
+  for (const auto& [m, leaves] : cases) {
+    BranchSparseMatrix A(*m);
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Identity(m->nv, m->nv) * 0.5;
+    std::vector<char> on_a_path(m->nv, 0);
+    for (const int leaf : leaves) {
+      const int n = A.depth(leaf) + 1;
+      const BranchSparseMatrix::RowMajorMatrix P = Eigen::MatrixXd::Random(6, n);
+      Eigen::MatrixXd spread = Eigen::MatrixXd::Zero(6, m->nv);
+      for (int a = 0; a < n; ++a) {
+        spread.col(A.path(leaf)[a]) = P.col(a);
+        on_a_path[A.path(leaf)[a]] = 1;
+      }
+      dense += spread.transpose() * spread;
+      A.add_path_gram(leaf, P);
+    }
+    for (int c = 0; c < m->nv; ++c) A.diagonal(c) += 0.5;
+    A.factorize();
+    int skipped = 0;
+    for (int k = 0; k < m->nv; ++k) {
+      // a coordinate is coupled when it is on a path and has an ancestor
+      EXPECT_EQ(A.coupled(k), on_a_path[k] && A.depth(k) > 0) << m->name << " column " << k;
+      skipped += !A.coupled(k);
+    }
+    EXPECT_GT(skipped, 0) << m->name;
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
+    Eigen::VectorXd x = b;
+    A.solve_lt(x);
+    for (int k = 0; k < m->nv; ++k) x[k] /= A.diagonal(k);
+    A.solve_l(x);
+    EXPECT_LT((x - dense.llt().solve(b)).norm(), 1e-12 * (1 + x.norm())) << m->name;
+    BranchSparseMatrix::RowMajorMatrix X = Eigen::MatrixXd::Zero(m->nv, 2);
+    X.col(0) = b;
+    X(m->nv - 1, 1) = 1.5;
+    const Eigen::MatrixXd before = X;
+    x = before.col(0);
+    A.solve_lt(x);
+    A.solve_lt_columns(X);
+    EXPECT_EQ((X.col(0) - x).norm(), 0.0) << m->name;
+    // L⁻ᵀ of the dense factor: Lᵀ D L = A with L unit lower triangular, column by column
+    const Eigen::MatrixXd L_dense = [&] {
+      Eigen::MatrixXd L = Eigen::MatrixXd::Identity(m->nv, m->nv);
+      for (int k = 0; k < m->nv; ++k) {
+        for (int p = 0; p < A.depth(k); ++p) L(k, A.path(k)[p]) = A.column(k)[p];
+      }
+      return L;
+    }();
+    Eigen::VectorXd D(m->nv);
+    for (int k = 0; k < m->nv; ++k) D[k] = A.diagonal(k);
+    EXPECT_LT((L_dense.transpose() * D.asDiagonal() * L_dense - dense).norm(), 1e-12 * dense.norm())
+        << m->name;
+    EXPECT_LT((L_dense.transpose() * X.col(1) - before.col(1)).norm(), 1e-12) << m->name;
+  }
+}
+
 TEST(BranchSparseMatrix, FactorizesAndSolvesWithoutAllocating) {
   const auto m = fixtures::human48();
   Data d(*m);
