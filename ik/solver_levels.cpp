@@ -307,8 +307,9 @@ void Solver::solve_pin_normal_equations() {
   // Sc = Zᵀ D⁻¹ Z (+ a tiny ridge: when a range row repeats a drag direction the system is
   // singular but consistent, and the ridge picks the finite solution); λ = Sc⁻¹ Zᵀ D⁻¹ L⁻ᵀ b =
   // Sc⁻¹ C u. Both are sums over the rows of Z, and only the rows on the constrained rows' root
-  // paths are nonzero.
-  Sc.setZero();
+  // paths are nonzero. Sc is symmetric and its Cholesky factorization reads the lower triangle
+  // alone, so only that is formed: column i from row i down, contiguous.
+  for (int i = 0; i < mc; ++i) Sc.col(i).tail(mc - i).setZero();
   lambda.setZero();
   const Eigen::VectorXd& h = w.half_solved_rhs;
   for (int k = 0; k < model_.nv; ++k) {
@@ -316,7 +317,7 @@ void Solver::solve_pin_normal_equations() {
     if (std::all_of(Zk, Zk + mc, [](double z) { return z == 0; })) continue;
     for (int i = 0; i < mc; ++i) {
       const double dz = Dinv[k] * Zk[i];
-      core::add_scaled(&Sc(0, i), Zk, dz, mc);  // the whole column: contiguous, and symmetric
+      core::add_scaled(&Sc(i, i), Zk + i, dz, mc - i);
       lambda[i] += dz * h[k];
     }
   }
