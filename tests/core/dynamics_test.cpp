@@ -34,6 +34,15 @@ std::vector<std::shared_ptr<const Model>> models() {
   return {fixtures::branching_tree(), fixtures::chain(7)};
 }
 
+// x = A⁻¹ b = L⁻¹ D⁻¹ L⁻ᵀ b with a factorized A
+Eigen::VectorXd solve_factorized(const BranchSparseMatrix& A, const Eigen::VectorXd& b) {
+  Eigen::VectorXd x = b;
+  A.solve_lt(x);
+  for (int k = 0; k < A.size(); ++k) x[k] /= A.diagonal(k);
+  A.solve_l(x);
+  return x;
+}
+
 TEST(Crba, MatchesRneaColumns) {
   for (const auto& m : models()) {
     Data d(*m);
@@ -236,12 +245,8 @@ TEST(BranchSparseMatrix, FactorizationAndSolvesMatchTheDenseOnes) {
             << m->name << " (" << A.path(k)[p] << ", " << k << ")";
       }
     }
-    // x = M⁻¹ b = L⁻¹ D⁻¹ L⁻ᵀ b
     const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
-    Eigen::VectorXd x = b;
-    A.solve_lt(x);
-    for (int k = 0; k < m->nv; ++k) x[k] /= A.diagonal(k);
-    A.solve_l(x);
+    const Eigen::VectorXd x = solve_factorized(A, b);
     EXPECT_LT((x - M.llt().solve(b)).norm(), 1e-10 * (1 + x.norm())) << m->name;
     // every column at once, as one column at a time: a dense one, a zero one, one on a leaf's path
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> X =
@@ -321,16 +326,13 @@ TEST(BranchSparseMatrix, ColumnsNoRowTouchesAreSkippedAndTheSolvesStayExact) {
     }
     EXPECT_GT(skipped, 0) << m->name;
     const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m->nv, -2, 3);
-    Eigen::VectorXd x = b;
-    A.solve_lt(x);
-    for (int k = 0; k < m->nv; ++k) x[k] /= A.diagonal(k);
-    A.solve_l(x);
-    EXPECT_LT((x - dense.llt().solve(b)).norm(), 1e-12 * (1 + x.norm())) << m->name;
+    const Eigen::VectorXd solved = solve_factorized(A, b);
+    EXPECT_LT((solved - dense.llt().solve(b)).norm(), 1e-12 * (1 + solved.norm())) << m->name;
     BranchSparseMatrix::RowMajorMatrix X = Eigen::MatrixXd::Zero(m->nv, 2);
     X.col(0) = b;
     X(m->nv - 1, 1) = 1.5;
     const Eigen::MatrixXd before = X;
-    x = before.col(0);
+    Eigen::VectorXd x = before.col(0);
     A.solve_lt(x);
     A.solve_lt_columns(X);
     EXPECT_EQ((X.col(0) - x).norm(), 0.0) << m->name;
