@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/com.hpp"
+#include "sim/collision.hpp"
 #include "sim/support_polygon.hpp"
 #include "sim/world.hpp"
 
@@ -42,11 +43,31 @@ std::optional<Vector3> center_of_pressure(const World& world, int body) {
   return Vector3(sum / total);
 }
 
-std::vector<Vector3> support_polygon_of(const World& world, int body) {
-  std::vector<Vector3> points;
+namespace {
+
+void add_ground_contact_points(const World& world, int body, std::vector<Vector3>& points) {
   for (const ContactPoint& p : world.contact_points()) {
     if (p.key.body == body && p.key.partner_body == -1 && p.key.env == 0) points.push_back(p.p_W);
   }
+}
+
+}  // namespace
+
+std::vector<Vector3> support_polygon_of(const World& world, int body) {
+  std::vector<Vector3> points;
+  add_ground_contact_points(world, body, points);
+  return support_polygon(points, world.environment().ground);
+}
+
+std::vector<Vector3> standing_support_polygon(const World& world,
+                                              int body,
+                                              const core::Data& data) {
+  std::vector<ContactPoint> near;
+  find_points_near_ground(body, world.shapes(body), data, world.environment().ground, kStandingGap,
+                          near);
+  std::vector<Vector3> points;
+  add_ground_contact_points(world, body, points);
+  for (const ContactPoint& p : near) points.push_back(p.p_W);
   return support_polygon(points, world.environment().ground);
 }
 
@@ -59,7 +80,7 @@ BalanceMeasures measure_balance(const World& world,
   BalanceMeasures b;
   b.com = core::center_of_mass(model, data);
   b.cop = center_of_pressure(world, body);
-  b.polygon = support_polygon_of(world, body);
+  b.polygon = standing_support_polygon(world, body, data);
   b.normal_force = std::max(0.0, ground.normal.normalized().dot(g.force));
   b.com_supported = b.cop && inside_polygon(b.polygon, b.com, ground, kSupportTolerance);
   return b;

@@ -31,20 +31,37 @@ GroundReaction ground_reaction(const World& world, int body);
 /// plane would. Empty when nothing presses on the ground.
 std::optional<core::Vector3> center_of_pressure(const World& world, int body);
 
-/// The convex hull of body b's contact points with the ground plane, on the plane.
+/// The convex hull of body b's contact points with the ground plane, on the plane: where the
+/// ground can push on it in this step (the balance feedback's bound on the centre of pressure).
 std::vector<core::Vector3> support_polygon_of(const World& world, int body);
+
+/// How far above the ground (m) a point of a body's shapes still counts as standing on it. A
+/// lightly loaded foot in soft contact (1e6 N/m per point) rises out of the ground and sinks back
+/// by a fraction of a millimetre from one step to the next while the figure stands still; a foot
+/// lifted to step clears the ground by centimetres.
+inline constexpr double kStandingGap = 0.002;
+
+/// The convex hull, on the ground plane, of body b's contact points with the ground and of the
+/// points of its shapes in the ground or less than kStandingGap above it (links' poses in `data`):
+/// the support of the figure standing, which a foot that unloads for a moment does not take away.
+/// It holds support_polygon_of (the contacts found at the start of the last step) whatever
+/// configuration `data` holds.
+std::vector<core::Vector3> standing_support_polygon(const World& world,
+                                                    int body,
+                                                    const core::Data& data);
 
 struct BalanceMeasures {
   core::Vector3 com = core::Vector3::Zero();
-  std::optional<core::Vector3> cop;    // empty when not pressing on the ground
-  std::vector<core::Vector3> polygon;  // support polygon (fewer than 3 points: a point, a line)
-  double normal_force = 0;             // N, along the ground's normal, never negative
+  std::optional<core::Vector3> cop;  // empty when not pressing on the ground
+  // the standing support polygon (fewer than 3 points: a point, a line)
+  std::vector<core::Vector3> polygon;
+  double normal_force = 0;  // N, along the ground's normal, never negative
   /// The centre of mass projects inside the support polygon (within 1 cm). False in the air.
   bool com_supported = false;
 };
 
-/// Balance measures of body b; `data` holds its kinematics (core::forward_kinematics) already; its
-/// centre-of-mass fields are updated.
+/// Balance measures of body b; `data` holds its kinematics (core::forward_kinematics) already, for
+/// the body's present configuration; its centre-of-mass fields are updated.
 BalanceMeasures measure_balance(const World& world,
                                 int body,
                                 const core::Model& model,

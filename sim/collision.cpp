@@ -36,18 +36,19 @@ void push(std::vector<ContactPoint>& out,
   out.push_back({key, p, n, depth});
 }
 
-// one shape against the ground plane
+// one shape against the ground plane: the points deeper than −gap (gap 0: in contact)
 void shape_on_plane(const LinkShape& s,
                     const Transform& X_WS,
                     const GroundPlane& g,
                     FeatureKey key,
-                    std::vector<ContactPoint>& out) {
+                    std::vector<ContactPoint>& out,
+                    double gap = 0) {
   if (s.kind == LinkShape::Kind::kBox) {
     for (int c = 0; c < 8; ++c) {
       const Vector3 x = X_WS * kCorners[c].cwiseProduct(s.half_extents);
       const double depth = -g.normal.dot(x - g.point);
       key.vertex = c;
-      if (depth > 0) push(out, key, x, g.normal, depth);
+      if (depth > -gap) push(out, key, x, g.normal, depth);
     }
     return;
   }
@@ -56,7 +57,7 @@ void shape_on_plane(const LinkShape& s,
   for (int c = 0; c < n; ++c) {
     const double depth = s.radius - g.normal.dot(centers[c] - g.point);
     key.vertex = c;
-    if (depth > 0) push(out, key, centers[c] - s.radius * g.normal, g.normal, depth);
+    if (depth > -gap) push(out, key, centers[c] - s.radius * g.normal, g.normal, depth);
   }
 }
 
@@ -151,6 +152,25 @@ void find_environment_contacts(int body,
         key.env = k + 1;
         shape_on_box(s, X_WS, box, key, out);
       }
+    }
+  }
+}
+
+void find_points_near_ground(int body,
+                             const BodyShapes& shapes,
+                             const core::Data& data,
+                             const GroundPlane& ground,
+                             double gap,
+                             std::vector<ContactPoint>& out) {
+  const int njoints = static_cast<int>(shapes.shapes.size());
+  for (int i = 1; i < njoints; ++i) {
+    Vector3 c;
+    double r;
+    if (!link_sphere(shapes, data, i, c, r)) continue;
+    if (ground.normal.dot(c - ground.point) >= r + gap) continue;
+    for (const LinkShape& s : shapes.shapes[i]) {
+      shape_on_plane(s, data.X_W[i] * s.X_LinkShape, ground,
+                     FeatureKey{body, i, s.index, 0, -1, 0, 0}, out, gap);
     }
   }
 }

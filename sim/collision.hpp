@@ -40,6 +40,16 @@ void find_environment_contacts(int body,
                                const Environment& env,
                                std::vector<ContactPoint>& out);
 
+/// The points of body `body`'s shapes (as find_environment_contacts finds them on the ground)
+/// that lie less than `gap` (m) above the ground plane or in it: the points in contact and those
+/// about to be. Their depth is negative above the plane.
+void find_points_near_ground(int body,
+                             const BodyShapes& shapes,
+                             const core::Data& data,
+                             const GroundPlane& ground,
+                             double gap,
+                             std::vector<ContactPoint>& out);
+
 /// Contacts between links of one body. `order` is scratch space that keeps the sweep's sorted
 /// order from one step to the next (nearly sorted input sorts in linear time).
 void find_self_contacts(int body,

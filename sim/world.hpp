@@ -97,6 +97,8 @@ class World {
   /// The balance feedback of dynamically pinned bodies (sim/balance_control.hpp); on by default.
   void set_balance_settings(const BalanceSettings& settings);
   const BalanceSettings& balance_settings() const { return balance_settings_; }
+  /// The collision shapes of body i's links.
+  const BodyShapes& shapes(int i) const { return work_.at(i).shapes; }
   /// What the balance feedback of body i did in its last step.
   const BalanceState& balance_state(int i) const { return work_.at(i).balance.state(); }
   /// The solver of body i after its last dynamic-pins step (torques, report); nullptr when none.

@@ -193,4 +193,32 @@ TEST(PhysicsSession, KeysInsertedWhilePhysicsRunsKeyThePoseShown) {
   EXPECT_EQ(k, 0);
 }
 
+// The page's gesture (tests/web/physics_stand_test.mjs): the left hand pulled 12 cm down in ten
+// samples 50 ms apart, held two seconds, let go. Standing in the posture it leaves, the figure
+// bears little weight on its left foot, which rises out of the soft ground by a fraction of a
+// millimetre now and then; it stays balanced on every frame of the two seconds after (the page
+// shows "Balance lost" on any frame that is not).
+TEST(PhysicsSession, AFootUnloadedForAMomentIsStillStandingOnTheGround) {
+  Session s(human(), "human48");
+  s.set_scene(stand());
+  run(s, 48, kFrame);
+  const int hand = s.model().link_index("l_hand");
+  const Vector3 hand0 = position(s, "l_hand");
+  s.drag_begin(hand, hand0);
+  for (int k = 0; k < 30; ++k) {
+    s.drag_move(hand0 - Vector3(0, 0.12 * std::min(10, 1 + k / 3) / 10, 0));
+    s.tick(kFrame);
+  }
+  run(s, 120, kFrame);
+  s.drag_end();
+  for (int k = 0; k < 120; ++k) {
+    s.tick(kFrame);
+    const animator::PhysicsMeasures m = s.physics()->measures();
+    ASSERT_TRUE(m.balanced) << "tick " << k
+                            << " after the drag was let go: the support polygon has "
+                            << m.support_polygon.size() << " vertices";
+    ASSERT_GE(m.support_polygon.size(), 3u) << "tick " << k;
+  }
+}
+
 }  // namespace

@@ -49,6 +49,40 @@ TEST(Collision, ABoxSunkInTheGroundTouchesItWithItsFourLowCorners) {
   }
 }
 
+// A box 1 mm above the ground touches nothing, but its four low corners are near the ground within
+// 2 mm, not within 0.5 mm; sunk 1 mm, the points near the ground are its contacts.
+TEST(Collision, PointsNearTheGroundAreThoseInItAndThoseJustAboveIt) {
+  sim::PropShape s;
+  s.size = Vector3(0.4, 0.2, 0.6);
+  Placed box(sim::make_prop("box", s, 1), Eigen::VectorXd());
+  const sim::GroundPlane ground;
+  core::forward_kinematics(*box.model, box.data,
+                           at(*box.model, Vector3(0, 0.101, 0), core::Quaternion::Identity()));
+  std::vector<sim::ContactPoint> points;
+  sim::find_environment_contacts(0, box.shapes, box.data, {}, points);
+  EXPECT_TRUE(points.empty());
+  sim::find_points_near_ground(0, box.shapes, box.data, ground, 0.002, points);
+  ASSERT_EQ(points.size(), 4u);
+  for (const sim::ContactPoint& p : points) {
+    EXPECT_NEAR(p.depth, -0.001, 1e-12);
+    EXPECT_NEAR(p.p_W.y(), 0.001, 1e-12);
+  }
+  points.clear();
+  sim::find_points_near_ground(0, box.shapes, box.data, ground, 0.0005, points);
+  EXPECT_TRUE(points.empty());
+
+  core::forward_kinematics(*box.model, box.data,
+                           at(*box.model, Vector3(0, 0.099, 0), core::Quaternion::Identity()));
+  std::vector<sim::ContactPoint> contacts;
+  sim::find_environment_contacts(0, box.shapes, box.data, {}, contacts);
+  sim::find_points_near_ground(0, box.shapes, box.data, ground, 0.002, points);
+  ASSERT_EQ(points.size(), contacts.size());
+  for (size_t k = 0; k < points.size(); ++k) {
+    EXPECT_EQ(points[k].p_W, contacts[k].p_W);
+    EXPECT_EQ(points[k].depth, contacts[k].depth);
+  }
+}
+
 TEST(Collision, ATiltedPlaneAndAStaticBoxAreSolidToo) {
   sim::Environment env;
   env.ground.normal = Vector3(0, 1, 1).normalized();
