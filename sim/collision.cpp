@@ -42,7 +42,7 @@ void shape_on_plane(const LinkShape& s,
                     const GroundPlane& g,
                     FeatureKey key,
                     std::vector<ContactPoint>& out,
-                    double gap = 0) {
+                    double gap) {
   if (s.kind == LinkShape::Kind::kBox) {
     for (int c = 0; c < 8; ++c) {
       const Vector3 x = X_WS * kCorners[c].cwiseProduct(s.half_extents);
@@ -128,6 +128,24 @@ bool link_sphere(
   return true;
 }
 
+// link i's shapes against the ground plane, the points deeper than −gap; (c, r) its bounding
+// sphere (link_sphere) tells first whether any can be
+void link_on_plane(int body,
+                   int i,
+                   const BodyShapes& shapes,
+                   const core::Data& data,
+                   const GroundPlane& g,
+                   const Vector3& c,
+                   double r,
+                   double gap,
+                   std::vector<ContactPoint>& out) {
+  if (g.normal.dot(c - g.point) >= r + gap) return;
+  for (const LinkShape& s : shapes.shapes[i]) {
+    shape_on_plane(s, data.X_W[i] * s.X_LinkShape, g, FeatureKey{body, i, s.index, 0, -1, 0, 0},
+                   out, gap);
+  }
+}
+
 }  // namespace
 
 void find_environment_contacts(int body,
@@ -140,17 +158,16 @@ void find_environment_contacts(int body,
     Vector3 c;
     double r;
     if (!link_sphere(shapes, data, i, c, r)) continue;
-    const bool near_ground = env.ground.normal.dot(c - env.ground.point) < r;
-    for (const LinkShape& s : shapes.shapes[i]) {
-      const Transform X_WS = data.X_W[i] * s.X_LinkShape;
-      FeatureKey key{body, i, s.index, 0, -1, 0, 0};
-      if (near_ground) shape_on_plane(s, X_WS, env.ground, key, out);
-      for (int k = 0; k < static_cast<int>(env.boxes.size()); ++k) {
-        const StaticBox& box = env.boxes[k];
-        const BoxQuery q = query_box(box.pose, box.half_extents, c);
-        if (!q.inside && (c - q.closest_W).squaredNorm() >= r * r) continue;
-        key.env = k + 1;
-        shape_on_box(s, X_WS, box, key, out);
+    // a link's ground points before its box points: group_into_pairs' stable sort by pair keeps
+    // each pair's points in shape order either way
+    link_on_plane(body, i, shapes, data, env.ground, c, r, 0.0, out);
+    for (int k = 0; k < static_cast<int>(env.boxes.size()); ++k) {
+      const StaticBox& box = env.boxes[k];
+      const BoxQuery q = query_box(box.pose, box.half_extents, c);
+      if (!q.inside && (c - q.closest_W).squaredNorm() >= r * r) continue;
+      for (const LinkShape& s : shapes.shapes[i]) {
+        shape_on_box(s, data.X_W[i] * s.X_LinkShape, box,
+                     FeatureKey{body, i, s.index, 0, -1, 0, k + 1}, out);
       }
     }
   }
@@ -166,12 +183,8 @@ void find_points_near_ground(int body,
   for (int i = 1; i < njoints; ++i) {
     Vector3 c;
     double r;
-    if (!link_sphere(shapes, data, i, c, r)) continue;
-    if (ground.normal.dot(c - ground.point) >= r + gap) continue;
-    for (const LinkShape& s : shapes.shapes[i]) {
-      shape_on_plane(s, data.X_W[i] * s.X_LinkShape, ground,
-                     FeatureKey{body, i, s.index, 0, -1, 0, 0}, out, gap);
-    }
+    if (link_sphere(shapes, data, i, c, r))
+      link_on_plane(body, i, shapes, data, ground, c, r, gap, out);
   }
 }
 
