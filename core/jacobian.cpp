@@ -59,16 +59,40 @@ void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X
 }
 
 namespace {
-// writes the columns on link's root path of the Jacobian of the world point p_W fixed on link,
-// leaving the others as they are
+// Columns first..last of a point's Jacobian from the joints' spatial axes (ω, v_O) at the world
+// origin: ω, and v_O + ω × p for the point p. The outputs are declared apart from the axes and
+// from each other (restrict), so the values stay in registers between the loads and the stores.
+void write_columns(const double* __restrict axes,
+                   int first,
+                   int last,
+                   double px,
+                   double py,
+                   double pz,
+                   double* __restrict angular,
+                   double* __restrict linear) {
+  for (int c = first; c <= last; ++c) {
+    const double* a = axes + 6 * c;
+    double* w = angular + 3 * c;
+    double* v = linear + 3 * c;
+    w[0] = a[0], w[1] = a[1], w[2] = a[2];
+    v[0] = a[3] + (a[1] * pz - a[2] * py);
+    v[1] = a[4] + (a[2] * px - a[0] * pz);
+    v[2] = a[5] + (a[0] * py - a[1] * px);
+  }
+}
+
+// writes the columns on the root path ending at coordinate last (Model::path_last_v of the
+// link) of the Jacobian of the world point p_W fixed on the link, leaving the others as they are
+// (the same columns as for_each_root_path_column, run by run)
 void write_root_path_columns(
-    const Model& model, const Data& data, int link, const Vector3& p_W, FrameJacobian& J_out) {
-  double* angular = J_out.angular.data();
-  double* linear = J_out.linear.data();
-  for_each_root_path_column(model, data, link, p_W, [&](int c, const Vector3& w, const Vector3& v) {
-    Eigen::Map<Vector3>(angular + 3 * c) = w;
-    Eigen::Map<Vector3>(linear + 3 * c) = v;
-  });
+    const Model& model, const Data& data, int last, const Vector3& p_W, FrameJacobian& J_out) {
+  double* const angular = J_out.angular.data();
+  double* const linear = J_out.linear.data();
+  for (int k = last; k >= 0;) {
+    const int start = model.chain_start_v[k];
+    write_columns(data.J.data(), start, k, p_W[0], p_W[1], p_W[2], angular, linear);
+    k = model.parent_v[start];
+  }
 }
 }  // namespace
 
@@ -79,7 +103,8 @@ void point_jacobian(const Model& model,
                     FrameJacobian& J_out) {
   J_out.angular.setZero(3, model.nv);
   J_out.linear.setZero(3, model.nv);
-  write_root_path_columns(model, data, link, data.X_W[link] * p_LinkPoint, J_out);
+  write_root_path_columns(model, data, model.path_last_v(link), data.X_W[link] * p_LinkPoint,
+                          J_out);
 }
 
 void write_point_jacobian_rows(const Model& model,
@@ -111,13 +136,14 @@ LinkJacobians::LinkJacobians(const Model& model, std::vector<Point> points)
     }
   }
   jacobians_.assign(points_.size(), FrameJacobian(model.nv));
+  for (const Point& point : points_) path_last_v_.push_back(model.path_last_v(point.link));
 }
 
 void LinkJacobians::update(const Model& model, const Data& data) {
   assert(jacobians_.empty() || jacobians_[0].linear.cols() == model.nv);
   for (std::size_t k = 0; k < points_.size(); ++k) {
     const Point& point = points_[k];
-    write_root_path_columns(model, data, point.link, data.X_W[point.link] * point.p_LinkPoint,
+    write_root_path_columns(model, data, path_last_v_[k], data.X_W[point.link] * point.p_LinkPoint,
                             jacobians_[k]);
   }
 }

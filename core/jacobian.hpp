@@ -106,6 +106,7 @@ class LinkJacobians {
 
  private:
   std::vector<Point> points_;
+  std::vector<int> path_last_v_;  // per point: the last coordinate on its link's root path
   std::vector<FrameJacobian> jacobians_;
 };
 
