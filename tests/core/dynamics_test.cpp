@@ -9,6 +9,7 @@
 #include "core/crba.hpp"
 #include "core/jacobian.hpp"
 #include "core/kinematics.hpp"
+#include "core/model_builder.hpp"
 #include "core/rnea.hpp"
 #include "tests/fixtures/allocation_counter.hpp"
 #include "tests/fixtures/fixtures.hpp"
@@ -65,6 +66,63 @@ TEST(Crba, IsSymmetricPositiveDefinite) {
     const Eigen::MatrixXd M = crba(*m, d, random_configuration(*m, 3));
     EXPECT_EQ(M, M.transpose());
     EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(M).info(), Eigen::Success);
+  }
+}
+
+// A free joint that is not the root (a body carried loose on an arm) with a subtree and a sibling
+// after it: CRBA's six-column pass for a free joint starts at its own coordinates and stops at
+// the end of its subtree, and H stays exactly symmetric. With a long chain below it (nv > 64)
+// the mirror is the tiled copy.
+std::shared_ptr<const Model> free_joint_on_an_arm(int chain_below) {
+  ModelBuilder b("free_on_arm");
+  LinkSpec arm = fixtures::box_link("arm", "", 2.0, Vector3(0.05, 0.05, 0.3));
+  arm.joint.type = JointType::kRevolute;
+  arm.joint.axis = Vector3::UnitY();
+  arm.com = Vector3(0, 0, 0.2);
+  b.add_link(arm);
+  LinkSpec loose = fixtures::box_link("loose", "arm", 1.0, Vector3(0.1, 0.05, 0.05));
+  loose.joint.type = JointType::kFree;
+  loose.joint.X_PJ = {Eigen::AngleAxisd(0.4, Vector3(1, -1, 2).normalized()).toRotationMatrix(),
+                      Vector3(0.05, 0, 0.4)};
+  loose.com = Vector3(0.02, -0.01, 0.03);
+  b.add_link(loose);
+  std::string parent = "loose";
+  for (int i = 0; i < chain_below; ++i) {
+    LinkSpec l =
+        fixtures::box_link("below" + std::to_string(i), parent, 0.3, Vector3(0.02, 0.02, 0.05));
+    l.joint.type = JointType::kRevolute;
+    l.joint.axis = Vector3::Unit(i % 3);
+    l.joint.X_PJ.p = Vector3(0, 0.02, 0.1);
+    l.com = Vector3(0, 0, 0.05);
+    b.add_link(l);
+    parent = l.name;
+  }
+  LinkSpec sibling = fixtures::box_link("sibling", "arm", 0.5, Vector3(0.05, 0.05, 0.05));
+  sibling.joint.type = JointType::kSpherical;
+  sibling.joint.X_PJ.p = Vector3(0, 0.1, 0.3);
+  sibling.com = Vector3(0.01, 0.02, 0);
+  b.add_link(sibling);
+  return b.finalize();
+}
+
+TEST(Crba, AFreeJointBelowTheRootMatchesRneaColumnsAndIsSymmetric) {
+  for (int chain_below : {2, 70}) {
+    const auto m = free_joint_on_an_arm(chain_below);
+    ASSERT_EQ(m->joint_type[2], JointType::kFree);
+    ASSERT_EQ(m->nv > 64, chain_below > 60);
+    Data d(*m);
+    for (std::uint64_t seed = 0; seed < 3; ++seed) {
+      const RandomState s = random_state(*m, seed);
+      const Eigen::MatrixXd M = crba(*m, d, s.q);
+      EXPECT_EQ(M, M.transpose()) << "nv " << m->nv;
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(m->nv);
+      const Eigen::VectorXd b = rnea(*m, d, s.q, zero, zero);
+      for (int i = 0; i < m->nv; ++i) {
+        const Eigen::VectorXd col = rnea(*m, d, s.q, zero, Eigen::VectorXd::Unit(m->nv, i)) - b;
+        EXPECT_LT((M.col(i) - col).norm(), 1e-12 * (1 + col.norm()))
+            << "nv " << m->nv << " col " << i;
+      }
+    }
   }
 }
 
