@@ -11,20 +11,6 @@ namespace core {
 
 namespace {
 
-// f(first, count) for each run of consecutive coordinates among k and its ancestors, from k up.
-// Walking runs instead of one parent at a time keeps the loads independent (a limb is one run),
-// so the updates stream through contiguous memory instead of waiting on each parent's index.
-template <typename F>
-inline void for_each_run_from(const Model& model, int k, F&& f) {
-  const int* start = model.chain_start_v.data();
-  const int* parent = model.parent_v.data();
-  for (int j = k; j >= 0;) {
-    const int c = start[j];
-    f(c, j - c + 1);
-    j = parent[c];
-  }
-}
-
 // out[c] = F_cᵀ s for c in first..end-1, F_c the c-th row of the nv-row column-major F. The
 // output is declared apart from F and s (restrict), so the loop runs two entries at a time
 // without the run-time overlap checks it would need otherwise (the runs are short: a limb).
@@ -69,6 +55,34 @@ inline void free_joint_columns(const double* __restrict f,
     move_x[c] = R[0][0] * fx + R[0][1] * fy + R[0][2] * fz;
     move_y[c] = R[1][0] * fx + R[1][1] * fy + R[1][2] * fz;
     move_z[c] = R[2][0] * fx + R[2][1] * fy + R[2][2] * fz;
+  }
+}
+
+// Columns a..a+5 of H (column-major m, nv × nv), rows a..end-1, for the free joint whose body
+// sits at X in the world: its six columns at once, then the 6×6 block's upper triangle from its
+// lower one (computed both ways they differ by rounding, and H must be exactly symmetric), then,
+// when mirror_rows, rows a..a+5 past the block, each row's six entries side by side.
+void fill_free_joint_block(const double* f0,
+                           Eigen::Index nv,
+                           const Transform& X,
+                           int a,
+                           int end,
+                           bool mirror_rows,
+                           double* m) {
+  double R[3][3], p[3];
+  for (int k = 0; k < 3; ++k) {
+    for (int r = 0; r < 3; ++r) R[k][r] = X.R(r, k);
+    p[k] = X.p[k];
+  }
+  double* const column = m + a * nv;
+  free_joint_columns(f0, nv, R, p, a, end, column, column + nv, column + 2 * nv, column + 3 * nv,
+                     column + 4 * nv, column + 5 * nv);
+  for (int c = a + 1; c < a + 6; ++c) {
+    for (int k = 0; k < c - a; ++k) m[c * nv + a + k] = column[k * nv + c];
+  }
+  if (!mirror_rows) return;
+  for (int c = a + 6; c < end; ++c) {
+    for (int k = 0; k < 6; ++k) m[c * nv + a + k] = column[k * nv + c];
   }
 }
 
@@ -117,25 +131,7 @@ const Eigen::MatrixXd& crba(const Model& model, Data& data, const Eigen::VectorX
         model.subtree_end[j] < model.njoints ? model.idx_v[model.subtree_end[j]] : model.nv;
     double* const column = m + a * nv;
     if (model.joint_type[j] == JointType::kFree) {
-      // its six columns at once, and each row's six mirrored entries are contiguous
-      const Transform& X = data.crba_X_W[j];
-      double R[3][3], p[3];
-      for (int k = 0; k < 3; ++k) {
-        for (int r = 0; r < 3; ++r) R[k][r] = X.R(r, k);
-        p[k] = X.p[k];
-      }
-      free_joint_columns(f0, nv, R, p, a, end, column, column + nv, column + 2 * nv,
-                         column + 3 * nv, column + 4 * nv, column + 5 * nv);
-      // the block's upper triangle from its lower one (the two differ by rounding), then the
-      // rest of the mirror
-      for (int c = a + 1; c < a + 6; ++c) {
-        for (int k = 0; k < c - a; ++k) m[c * nv + a + k] = column[k * nv + c];
-      }
-      if (mirror_inline) {
-        for (int c = a + 6; c < end; ++c) {
-          for (int k = 0; k < 6; ++k) m[c * nv + a + k] = column[k * nv + c];
-        }
-      }
+      fill_free_joint_block(f0, nv, data.crba_X_W[j], a, end, mirror_inline, m);
       a += 5;
       continue;
     }
@@ -175,7 +171,7 @@ void ltdl_factorize(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
     for (int k = 1; k < model.nv; ++k) {
       if (lambda[k] < 0) continue;
       double* const Hk = base + k * stride;  // Hk[j] = H(j, k): upper
-      for_each_run_from(model, lambda[k], [&](int c, int n) {
+      for_each_ancestor_run(model, lambda[k], [&](int c, int n) {
         for (int j = c; j < c + n; ++j) {
           double& lower = base[j * stride + k];  // H(k, j)
           if constexpr (decltype(lower_to_upper)::value) {
@@ -206,7 +202,7 @@ void ltdl_factorize_upper(const Model& model, Eigen::Ref<Eigen::MatrixXd> H) {
       // H(j, i) −= a H(j, k) for i and its ancestors j, then H(i, k) = a
       const double a = Hk[i] * inv_dk;
       double* const Hi = base + i * stride;
-      for_each_run_from(model, i, [&](int c, int n) {
+      for_each_ancestor_run(model, i, [&](int c, int n) {
         for (int j = c; j < c + n; ++j) Hi[j] -= a * Hk[j];
       });
       Hk[i] = a;
@@ -224,7 +220,7 @@ void ltdl_solve_lt(const Model& model,
     const double xk = xs[k];
     if (xk == 0 || model.parent_v[k] < 0) continue;
     const double* Lk = L.data() + k * L.outerStride();
-    for_each_run_from(model, model.parent_v[k], [&](int c, int n) {
+    for_each_ancestor_run(model, model.parent_v[k], [&](int c, int n) {
       for (int j = c; j < c + n; ++j) xs[j] -= xk * Lk[j];
     });
   }
@@ -238,7 +234,7 @@ void ltdl_solve_l(const Model& model,
     if (model.parent_v[k] < 0) continue;
     const double* Lk = L.data() + k * L.outerStride();
     double sum = 0;
-    for_each_run_from(model, model.parent_v[k], [&](int c, int n) {
+    for_each_ancestor_run(model, model.parent_v[k], [&](int c, int n) {
       for (int j = c; j < c + n; ++j) sum += Lk[j] * xs[j];
     });
     xs[k] -= sum;
@@ -277,7 +273,7 @@ void solve_mass_matrix_lt_on_path(const Model& model,
   double* const x = X.data();
   const double* const L = data.LTDL.data();
   const Eigen::Index l_stride = data.LTDL.outerStride();
-  for_each_run_from(model, last, [&](int start, int n) {
+  for_each_ancestor_run(model, last, [&](int start, int n) {
     for (int k = start + n - 1; k >= start; --k) {
       if (model.parent_v[k] < 0) continue;
       const double* const Lk = L + k * l_stride;  // Lk[j] = L(k, j) for the ancestors j of k
@@ -285,7 +281,7 @@ void solve_mass_matrix_lt_on_path(const Model& model,
         const double xk = x[t * x_stride + k];
         if (xk == 0) continue;
         double* const xt = x + t * x_stride;
-        for_each_run_from(model, model.parent_v[k], [&](int c, int m) {
+        for_each_ancestor_run(model, model.parent_v[k], [&](int c, int m) {
           for (int j = c; j < c + m; ++j) xt[j] -= xk * Lk[j];
         });
       }

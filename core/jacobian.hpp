@@ -37,30 +37,6 @@ const Matrix6X& compute_joint_jacobians(const Model& model, Data& data);
 /// The same from the world poses X_W (njoints) into J (6 x nv, sized).
 void compute_joint_jacobians(const Model& model, const std::vector<Transform>& X_W, Matrix6X& J);
 
-/// Calls column(c, ω, v) for each velocity coordinate c on the root path of `link`: ω and v are
-/// the angular velocity and the velocity of the world point p_W (fixed on the link) per unit v_c,
-/// world-aligned, that is column c of the point's Jacobian. Every other column of it is zero.
-/// Requires: compute_joint_jacobians(model, data, q).
-template <typename Column>
-void for_each_root_path_column(
-    const Model& model, const Data& data, int link, const Vector3& p_W, Column&& column) {
-  const int last = model.path_last_v(link);
-  const double* axes = data.J.data();  // column c: the joint's spatial axis (ω, v_O) at the origin
-  const double px = p_W[0], py = p_W[1], pz = p_W[2];
-  // the ancestors' coordinates as contiguous unbranched runs, leaf to root
-  for (int k = last; k >= 0;) {
-    const int start = model.chain_start_v[k];
-    for (int c = start; c <= k; ++c) {
-      const double* a = axes + 6 * c;
-      // the point moves with v_O + ω × p_W
-      column(c, Vector3(a[0], a[1], a[2]),
-             Vector3(a[3] + (a[1] * pz - a[2] * py), a[4] + (a[2] * px - a[0] * pz),
-                     a[5] + (a[0] * py - a[1] * px)));
-    }
-    k = model.parent_v[start];
-  }
-}
-
 /// Writes the root-path columns of the world point p_W's Jacobian into rows of a stacked matrix:
 /// its 3 angular rows from angular_row, its 3 linear rows from linear_row (-1: not wanted). The
 /// rows' other columns are left as they are: the caller zeroes them.
