@@ -41,7 +41,11 @@ inline void add_scaled_rows_prefix(
 
 }  // namespace
 
-BranchSparseMatrix::BranchSparseMatrix(const Model& model) : offset_(model.nv), depth_(model.nv) {
+BranchSparseMatrix::BranchSparseMatrix(const Model& model)
+    : offset_(model.nv),
+      depth_(model.nv),
+      parent_(model.parent_v),
+      chain_start_(model.chain_start_v) {
   int total = 0;
   for (int k = 0; k < model.nv; ++k) {
     // parent_v[k] < k: a coordinate's ancestors come before it
@@ -149,15 +153,17 @@ void BranchSparseMatrix::factorize() {
 }
 
 void BranchSparseMatrix::solve_lt(Eigen::Ref<Eigen::VectorXd> x) const {
-  // back substitution with Lᵀ: x_j −= L(k, j) x_k for the ancestors j of each k, leaves first
+  // back substitution with Lᵀ: x_j −= L(k, j) x_k for the ancestors j of each k, leaves first. A
+  // run of ancestors c … c + n − 1 sits at depths depth(c) … depth(c) + n − 1 of k's column, so
+  // each run is one contiguous update.
   double* const xs = x.data();
   for (int k = size() - 1; k >= 0; --k) {
     const double xk = xs[k];
     // a zero entry or an uncoupled column changes nothing: sparse right-hand sides cost little
     if (xk == 0 || !coupled_[k]) continue;
     const double* const Lk = column(k);
-    const int* const path_k = path(k);
-    for (int p = 0; p < depth_[k]; ++p) xs[path_k[p]] -= xk * Lk[p];
+    for_each_ancestor_run(chain_start_.data(), parent_.data(), parent_[k],
+                          [&](int c, int n) { add_scaled(xs + c, Lk + depth_[c], -xk, n); });
   }
 }
 
@@ -178,7 +184,9 @@ void BranchSparseMatrix::solve_lt_columns(Eigen::Ref<RowMajorMatrix> X) const {
 }
 
 void BranchSparseMatrix::solve_l(Eigen::Ref<Eigen::VectorXd> x) const {
-  // forward substitution with L: x_k −= Σ L(k, j) x_j over the ancestors j, root first
+  // forward substitution with L: x_k −= Σ L(k, j) x_j over the ancestors j, root first. Through
+  // the path's indices, not by runs as in solve_lt: one sum over the whole path costs less than a
+  // short sum per run.
   double* const xs = x.data();
   for (int k = 0; k < size(); ++k) {
     if (!coupled_[k]) continue;

@@ -64,6 +64,8 @@ class BranchSparseMatrix {
   std::vector<int> offset_;  // where column k starts in values_ and path_
   std::vector<int> depth_;
   std::vector<int> path_;
+  std::vector<int> parent_;       // Model::parent_v
+  std::vector<int> chain_start_;  // Model::chain_start_v: the solves walk the ancestors by runs
   std::vector<double> values_;
   std::vector<char> coupled_;  // per column, set by factorize(): L(k, ·) has a nonzero entry
   std::vector<std::pair<int, int>> chain_blocks_;  // (lo, hi), hi descending: factorize()'s order

@@ -166,18 +166,21 @@ struct Model {
 };
 
 /// f(first, count) for each run of consecutive velocity coordinates among k and its ancestors,
-/// from k up to the root (nothing when k < 0). A run is an unbranched stretch of the tree (a
-/// limb, a chain), so the loops over a root path stream through contiguous memory instead of
-/// waiting on each parent's index.
+/// from k up to the root (nothing when k < 0), given Model::chain_start_v and Model::parent_v. A
+/// run is an unbranched stretch of the tree (a limb, a chain), so the loops over a root path
+/// stream through contiguous memory instead of waiting on each parent's index.
+template <typename F>
+inline void for_each_ancestor_run(const int* chain_start_v, const int* parent_v, int k, F&& f) {
+  for (int j = k; j >= 0;) {
+    const int c = chain_start_v[j];
+    f(c, j - c + 1);
+    j = parent_v[c];
+  }
+}
+
 template <typename F>
 inline void for_each_ancestor_run(const Model& model, int k, F&& f) {
-  const int* start = model.chain_start_v.data();
-  const int* parent = model.parent_v.data();
-  for (int j = k; j >= 0;) {
-    const int c = start[j];
-    f(c, j - c + 1);
-    j = parent[c];
-  }
+  for_each_ancestor_run(model.chain_start_v.data(), model.parent_v.data(), k, f);
 }
 
 }  // namespace core

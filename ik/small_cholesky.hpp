@@ -7,11 +7,37 @@
 
 namespace ik {
 
+namespace detail {
+// gram_lower for exactly M rows: the M(M+1)/2 sums stay in registers across the columns, and a
+// column is skipped after one test of its M entries
+template <int M>
+inline void gram_lower_fixed(const Eigen::Ref<const Eigen::MatrixXd>& J,
+                             Eigen::Ref<Eigen::MatrixXd> G) {
+  double sum[M][M] = {};  // sum[j][i] = G(i, j) for i >= j
+  for (Eigen::Index c = 0; c < J.cols(); ++c) {
+    const double* const Jc = J.col(c).data();
+    double x[M];
+    bool zero = true;
+    for (int i = 0; i < M; ++i) x[i] = Jc[i], zero = zero && Jc[i] == 0;
+    if (zero) continue;
+    for (int j = 0; j < M; ++j) {
+      for (int i = j; i < M; ++i) sum[j][i] += x[j] * x[i];
+    }
+  }
+  for (int j = 0; j < M; ++j) {
+    for (int i = j; i < M; ++i) G(i, j) = sum[j][i];
+  }
+}
+}  // namespace detail
+
 /// The lower triangle of G = J Jᵀ (G square, J with as many rows), summed a column of J at a time:
 /// each is a short contiguous vector, and the zero columns (coordinates off a task's path) are
-/// skipped. The rest of G is left as it was.
+/// skipped. The rest of G is left as it was. Six rows (a 6-D drag) and three have their own
+/// kernel.
 inline void gram_lower(const Eigen::Ref<const Eigen::MatrixXd>& J, Eigen::Ref<Eigen::MatrixXd> G) {
   const Eigen::Index m = J.rows();
+  if (m == 6) return detail::gram_lower_fixed<6>(J, G);
+  if (m == 3) return detail::gram_lower_fixed<3>(J, G);
   for (Eigen::Index j = 0; j < m; ++j) G.col(j).tail(m - j).setZero();
   for (Eigen::Index c = 0; c < J.cols(); ++c) {
     const double* const Jc = J.col(c).data();
