@@ -23,11 +23,10 @@ std::string not_saved(const animator::SessionWriteError& e) {
 thread_local bool t_posting_thread_steps = false;
 
 // How much of its time a posting thread may spend in the steps it runs itself: the allowance
-// refills at kInlineShare of wall time up to kInlineBurst, and each step run here spends its
-// wall time. One session's drag costs well under 1 % of the I/O thread; with many sessions
-// dragging at once the allowance runs out and their samples go to the pool's workers, so the
-// I/O thread keeps reading and writing for everyone else.
-constexpr double kInlineShare = 0.1;
+// refills at SessionActor::kInlineShare of wall time up to kInlineBurst, and each step run here
+// spends its wall time. One session's drag costs well under 1 % of the I/O thread; with many
+// sessions dragging at once the allowance runs out and their samples go to the pool's workers, so
+// the I/O thread keeps reading and writing for everyone else.
 constexpr Clock::duration kInlineBurst = std::chrono::milliseconds(2);
 struct InlineAllowance {
   Clock::time_point refilled{};
@@ -38,7 +37,7 @@ thread_local InlineAllowance t_inline_allowance;
 bool inline_allowance_left(Clock::time_point now) {
   auto& a = t_inline_allowance;
   const auto refill =
-      std::chrono::duration_cast<Clock::duration>((now - a.refilled) * kInlineShare);
+      std::chrono::duration_cast<Clock::duration>((now - a.refilled) * SessionActor::kInlineShare);
   a.left = std::min(kInlineBurst, a.left + refill);
   a.refilled = now;
   return a.left > Clock::duration::zero();

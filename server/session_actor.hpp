@@ -85,6 +85,8 @@ class SessionActor : private ActorPool::Job {
   /// posting thread (the server's I/O thread) if the last tick took at most this long: two
   /// thread wake-ups cost more than such a solve. Slower sessions always run on a worker.
   static constexpr std::chrono::microseconds kInlineTickBudget{250};
+  /// The share of a posting thread's wall time it may spend in the steps it runs itself.
+  static constexpr double kInlineShare = 0.1;
 
   /// `journal` null: the session is not saved. Steps run on `pool`.
   SessionActor(std::string id,

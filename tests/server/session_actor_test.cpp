@@ -231,10 +231,11 @@ TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsO
   ASSERT_TRUE(recorder_->wait_for_answer(1));
   EXPECT_NE(recorder_->answer_thread(1), std::this_thread::get_id());
   std::uint32_t seq = 0;
-  // posts `samples` drag samples 5 ms apart (past kMinTickInterval), or further apart when a tick
-  // costs more than a quarter millisecond (a sanitizer build): a posting thread may spend a tenth
-  // of its wall time in ticks, so the gap lets that allowance refill for the next sample. Returns
-  // how many were acknowledged, solved and had their pose sent before post() returned.
+  // posts `samples` drag samples 5 ms apart (past kMinTickInterval), or further apart when ticks
+  // are slow (a sanitizer build): a posting thread may spend SessionActor::kInlineShare of its
+  // wall time in ticks, so a gap of 2 × a tick's cost / kInlineShare lets that allowance refill
+  // for the next sample. Returns how many were acknowledged, solved and had their pose sent before
+  // post() returned.
   const auto samples_answered_here = [&](int samples) {
     int answered_here = 0;
     for (int i = 0; i < samples; ++i, ++seq) {
@@ -248,8 +249,10 @@ TEST_F(SessionActorTest, CheapDragSamplesAreSolvedOnThePostingThreadAndCommandsO
         ++answered_here;
       }
       EXPECT_TRUE(recorder_->wait_for_answer(id));
-      std::this_thread::sleep_for(std::max<std::chrono::microseconds>(
-          std::chrono::milliseconds(5), 20 * actor_->stats().last_tick_cost));
+      const auto refill = std::chrono::duration_cast<std::chrono::microseconds>(
+          actor_->stats().last_tick_cost * (2 / server::SessionActor::kInlineShare));
+      std::this_thread::sleep_for(
+          std::max<std::chrono::microseconds>(std::chrono::milliseconds(5), refill));
     }
     return answered_here;
   };
