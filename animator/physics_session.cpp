@@ -59,7 +59,7 @@ void PhysicsSession::set_tasks(const std::vector<Pin>& pins,
   // the links it stands on get weak orientation pins (Yamane §9.4), unless the user pinned them:
   // the balance feedback (sim/balance_control.hpp) tilts them to keep the figure over its feet
   for (const auto& [link, R] : supports_) {
-    if (std::any_of(pins.begin(), pins.end(), [&](const Pin& p) { return p.link == link; })) {
+    if (std::any_of(pins.begin(), pins.end(), [l = link](const Pin& p) { return p.link == l; })) {
       continue;
     }
     problem_.add(ik::LinkTask{

@@ -116,7 +116,7 @@ void Session::drag_begin(int link,
   }
   if (drag_) drag_end();  // a lost drag_end: close the previous gesture first
   gesture_before_ = doc_;
-  drag_.emplace();
+  drag_ = Drag{};
   drag_->link = link;
   drag_->p_LinkPoint = p_LinkPoint;
   drag_->target_W = target_W;

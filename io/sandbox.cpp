@@ -18,13 +18,7 @@
 #include <cstring>
 #include <new>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define PINDRAG_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define PINDRAG_ASAN 1
-#endif
-#endif
+#include "core/sanitizers.hpp"
 #ifdef PINDRAG_ASAN
 #include <sanitizer/asan_interface.h>
 #include <sanitizer/common_interface_defs.h>

@@ -57,6 +57,7 @@
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 #include "core/rnea.hpp"
+#include "core/sanitizers.hpp"
 #include "io/bundled_characters.hpp"
 #include "io/urdf.hpp"
 #include "tests/fixtures/fixtures.hpp"
@@ -635,7 +636,7 @@ std::string compare_with_kdl(const std::string& label, const std::string& urdf) 
     }
     KDL::ChainIdSolver_RNE id(chain, kKdlGravity);
     KDL::ChainDynParam dyn(chain, kKdlGravity);
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(PINDRAG_ASAN)
     KDL::ChainFdSolver_RNE fd(chain, kKdlGravity);
 #endif
     const KDL::Wrenches none(chain.getNrOfSegments(), KDL::Wrench::Zero());
@@ -663,7 +664,7 @@ std::string compare_with_kdl(const std::string& label, const std::string& urdf) 
               H(r, c);
         }
       }
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(PINDRAG_ASAN)
       if (fd.CartToJnt(q, v, tau, none, out) < 0) return "ChainFdSolver_RNE failed";
       peer.a = from_kdl(*sub, out, names);
 #else

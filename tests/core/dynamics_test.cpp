@@ -395,9 +395,9 @@ TEST(BranchSparseMatrix, ColumnsNoRowTouchesAreSkippedAndTheSolvesStayExact) {
     A.solve_lt_columns(X);
     EXPECT_EQ((X.col(0) - x).norm(), 0.0) << m->name;
     // L⁻ᵀ of the dense factor: Lᵀ D L = A with L unit lower triangular, column by column
-    const Eigen::MatrixXd L_dense = [&] {
-      Eigen::MatrixXd L = Eigen::MatrixXd::Identity(m->nv, m->nv);
-      for (int k = 0; k < m->nv; ++k) {
+    const Eigen::MatrixXd L_dense = [&, nv = m->nv] {
+      Eigen::MatrixXd L = Eigen::MatrixXd::Identity(nv, nv);
+      for (int k = 0; k < nv; ++k) {
         for (int p = 0; p < A.depth(k); ++p) L(k, A.path(k)[p]) = A.column(k)[p];
       }
       return L;

@@ -545,8 +545,8 @@ TEST(UrdfMeshes, PackageRelativeFileAndEscapes) {
       {"http", "uses the URI scheme 'http', which is not supported"},
   };
   for (const auto& [link, fragment] : expected) {
-    const auto uri =
-        std::find_if(links.begin(), links.end(), [&](const auto& l) { return l.first == link; });
+    const auto uri = std::find_if(links.begin(), links.end(),
+                                  [name = link](const auto& l) { return l.first == name; });
     const std::string head = prefix + link + "': visual mesh '" + uri->second + "' ";
     ASSERT_EQ(count_containing(r.warnings, head), 1) << head << "\n" << joined(r.warnings);
     for (const std::string& w : r.warnings) {

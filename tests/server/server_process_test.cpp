@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/sanitizers.hpp"
 #include "tests/server/ws_test_client.hpp"
 
 namespace {
@@ -135,7 +136,7 @@ size_t count(const std::string& text, const std::string& what) {
 }
 
 TEST(ServeProcess, AcceptAtTheDescriptorLimitWaitsInsteadOfSpinning) {
-#ifdef __SANITIZE_ADDRESS__
+#ifdef PINDRAG_ASAN
   // UBSan's vptr check opens a pipe to probe memory; with no descriptor left it reports every
   // dynamic type it checks as invalid, so the sanitized server cannot run at its limit
   GTEST_SKIP() << "needs descriptors the sanitizer runtime takes; runs in the optimized build";
