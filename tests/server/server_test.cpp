@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <map>
+#include <memory>
+#include <thread>
 
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/server/server_fixture.hpp"
@@ -252,12 +255,57 @@ TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
   const auto ticks = after.ticks - before.ticks;
   EXPECT_EQ(after.drag_samples_received - before.drag_samples_received,
             static_cast<unsigned>(kBurst));
-  // superseded samples were dropped: far fewer applications and ticks than samples
-  EXPECT_LT(applied, 200u) << "applied " << applied;
-  EXPECT_LT(ticks, 200u) << "ticks " << ticks;
+  // How many samples wait for each step depends on how fast this build parses and solves, so the
+  // solves are bounded by the actor's rule, not by a figure: sample ticks come at least
+  // kMinTickInterval apart, periodic ones kTickPeriod. The held burst below checks the coalescing.
+  const double tick_rate_limit =
+      1.0 / std::chrono::duration<double>(server::SessionActor::kMinTickInterval).count() +
+      1.0 / std::chrono::duration<double>(server::SessionActor::kTickPeriod).count();
+  EXPECT_LE(static_cast<double>(ticks), seconds * tick_rate_limit + 2.0) << "ticks " << ticks;
   EXPECT_LT(seconds, 5.0);
   std::cout << "burst of " << kBurst << " drag_moves: " << applied << " applied, " << ticks
             << " ticks, " << seconds * 1e3 << " ms until the last ack\n";
+
+  // The same burst while the actor is busy (a command holds it until every sample has arrived):
+  // the superseded samples are dropped whatever the speed, and only the newest is applied.
+  auto entered = std::make_shared<std::promise<void>>();
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  std::thread holder([&] {
+    actor->call([&](animator::Session&) {
+      entered->set_value();
+      released.wait();
+    });
+  });
+  entered->get_future().wait();
+  for (int seq = kBurst + 1; seq <= 2 * kBurst; ++seq) {
+    const double a = 0.1 * (2 * kBurst - seq) / kBurst;
+    ws->send({{"type", "drag_move"},
+              {"seq", seq},
+              {"id", seq},
+              {"target", {start[0] + a, start[1], start[2] + a}}});
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (actor->stats().drag_samples_received - before.drag_samples_received <
+             static_cast<unsigned>(2 * kBurst) &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  release.set_value();
+  holder.join();
+  while (next_ack <= 2 * kBurst) {
+    const auto m = ws->read();
+    if (!m.text) continue;
+    const json j = m.json();
+    if (j.at("type") == "error") FAIL() << j.dump();
+    if (j.at("type") != "ack") continue;
+    ASSERT_EQ(j.at("id"), next_ack) << "acks out of order";
+    ++next_ack;
+  }
+  const server::ActorStats held = actor->stats();
+  EXPECT_EQ(held.drag_samples_received - after.drag_samples_received,
+            static_cast<unsigned>(kBurst));
+  EXPECT_EQ(held.drag_samples_applied - after.drag_samples_applied, 1u);
 }
 
 TEST_F(ServerTest, ReconnectRestoresPinsKeysAndLayers) {
