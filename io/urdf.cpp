@@ -38,9 +38,10 @@ Matrix3 urdf_to_y_up() {
 namespace {
 
 // Text that tinyxml2 refuses, or that has no <robot>: tinyxml2's message (with a line), and
-// urdfdom's when its XML parser (TinyXML 1) also rejects the text. Where TinyXML 1 is more
-// lenient urdfdom would build a model from text that is not XML, and on a rootless cycle it fails
-// after building a shared_ptr cycle it never frees, so it is not asked then.
+// urdfdom's when its XML parser (TinyXML 1) finds no <robot> in the text either. Where TinyXML 1
+// is more lenient, urdfdom would build links that tinyxml2 never saw (not checked for cycles),
+// and on a rootless cycle it fails after building a shared_ptr cycle it never frees, so it is not
+// asked then.
 [[noreturn]] void refuse_document(const tinyxml2::XMLDocument& doc,
                                   const std::string& xml,
                                   const std::string& src) {
@@ -55,14 +56,17 @@ namespace {
   } else {
     lines.push_back("no <robot> element (rule: a URDF's root element is <robot>)");
   }
-  if (!doc.Error() || !urdf_internal::tinyxml_accepts(xml)) {
+  if (!urdf_internal::urdfdom_finds_a_robot(xml)) {
     urdf_internal::UrdfdomResult urdfdom = urdf_internal::run_urdfdom(xml);
     const urdf_internal::UrdfdomModelGuard release_cycles(urdfdom.model);
     for (std::string& l : urdfdom.errors) lines.push_back(std::move(l));
-  } else {
+  } else if (doc.Error()) {
     lines.push_back(
         "urdfdom's XML parser (TinyXML) accepts the text, but it is not "
         "well-formed XML");
+  } else {
+    lines.push_back(
+        "urdfdom's XML parser (TinyXML) finds a <robot> element where tinyxml2 finds none");
   }
   fail(src, lines);
 }

@@ -115,11 +115,11 @@ UrdfdomResult run_urdfdom(const std::string& xml) {
   return out;
 }
 
-bool tinyxml_accepts(const std::string& xml) {
+bool urdfdom_finds_a_robot(const std::string& xml) {
   if (xml_rules_violation(xml)) return false;
   TiXmlDocument doc;
   doc.Parse(tinyxml_input(xml).c_str());
-  return !doc.Error();
+  return !doc.Error() && doc.FirstChildElement("robot") != nullptr;
 }
 
 UrdfdomModelGuard::~UrdfdomModelGuard() {

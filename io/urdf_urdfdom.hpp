@@ -37,9 +37,9 @@ struct UrdfdomResult {
 /// is not parsed; the violation is the one error.
 UrdfdomResult run_urdfdom(const std::string& xml);
 
-/// Whether TinyXML 1 parses `xml` without an error (false, unparsed, when it breaks the XML
-/// rules).
-bool tinyxml_accepts(const std::string& xml);
+/// Whether urdfdom would read links from `xml`: TinyXML 1 (its XML parser) parses it without an
+/// error and finds a <robot> element. False, unparsed, when it breaks the XML rules.
+bool urdfdom_finds_a_robot(const std::string& xml);
 
 /// Frees a urdfdom model's links even when they form a cycle: urdfdom links own their children
 /// through shared_ptr, so a cyclic file makes a reference cycle that would never be freed.

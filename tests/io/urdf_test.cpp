@@ -837,6 +837,11 @@ const std::vector<Malformed>& malformed_corpus() {
       {"no_robot.urdf",
        {"no <robot> element (rule: a URDF's root element is <robot>)",
         "urdfdom: Could not find the 'robot' element in the xml file"}},
+      // a fuzzer's find: tinyxml2 stops at the stray end tag, TinyXML 1 reads on into a rootless
+      // cycle that urdfdom would build and never free, so urdfdom is not asked
+      {"stray_end_tag_hides_a_cycle.urdf",
+       {"no <robot> element (rule: a URDF's root element is <robot>)",
+        "urdfdom's XML parser (TinyXML) finds a <robot> element where tinyxml2 finds none"}},
       {"world_two_children.urdf",
        {"link 'world' is a massless root with 2 child joints (rule: the world link connects to "
         "exactly one link, the model's root)"}},
