@@ -4,12 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <future>
 #include <map>
-#include <memory>
 #include <thread>
 
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/server/actor_hold.hpp"
 #include "tests/server/server_fixture.hpp"
 
 namespace {
@@ -268,16 +267,7 @@ TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
 
   // The same burst while the actor is busy (a command holds it until every sample has arrived):
   // the superseded samples are dropped whatever the speed, and only the newest is applied.
-  auto entered = std::make_shared<std::promise<void>>();
-  std::promise<void> release;
-  std::shared_future<void> released = release.get_future().share();
-  std::thread holder([&] {
-    actor->call([&](animator::Session&) {
-      entered->set_value();
-      released.wait();
-    });
-  });
-  entered->get_future().wait();
+  server_test::ActorHold hold(*actor);
   for (int seq = kBurst + 1; seq <= 2 * kBurst; ++seq) {
     const double a = 0.1 * (2 * kBurst - seq) / kBurst;
     ws->send({{"type", "drag_move"},
@@ -291,8 +281,7 @@ TEST_F(ServerTest, ThousandDragMovesInOneBurstAreCoalescedAndAckedInOrder) {
          std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  release.set_value();
-  holder.join();
+  hold.release();
   while (next_ack <= 2 * kBurst) {
     const auto m = ws->read();
     if (!m.text) continue;

@@ -19,6 +19,7 @@
 
 #include "io/bundled_characters.hpp"
 #include "tests/fixtures/fixtures.hpp"
+#include "tests/server/actor_hold.hpp"
 
 namespace {
 
@@ -137,26 +138,14 @@ class SessionActorTest : public ::testing::Test {
   }
   // Holds the actor thread inside a call until the returned function is called.
   std::function<void()> block_actor() {
-    auto entered = std::make_shared<std::promise<void>>();
-    auto release = std::make_shared<std::promise<void>>();
-    auto released = release->get_future().share();
-    blocker_ = std::thread([this, entered, released] {
-      actor_->call([&](animator::Session&) {
-        entered->set_value();
-        released.wait();
-      });
-    });
-    entered->get_future().wait();
-    return [this, release] {
-      release->set_value();
-      blocker_.join();
-    };
+    hold_.emplace(*actor_);
+    return [this] { hold_->release(); };
   }
 
   std::string save_path_;
   std::shared_ptr<Recorder> recorder_ = std::make_shared<Recorder>();
   std::unique_ptr<server::SessionActor> actor_;
-  std::thread blocker_;
+  std::optional<server_test::ActorHold> hold_;
 };
 
 TEST_F(SessionActorTest, EditsRunInTheOrderPostedAndARefusalStopsNothing) {
