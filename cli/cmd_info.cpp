@@ -86,6 +86,11 @@ nlohmann::json c3d_summary(const std::string& path) {
   return out;
 }
 
+// every kind of file the command summarizes, for the message that refuses another
+constexpr const char* kReads =
+    "pindrag info reads .urdf and .json characters, .bvh, .gltf, .glb, .fbx and .dae clips, .c3d "
+    "marker trials, and the bundled characters by name";
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
@@ -104,6 +109,11 @@ void add_info_command(CLI::App& app) {
         out = c3d_summary(*file);
       } else if (clip_format(*file)) {
         out = clip_summary(*file);
+      } else if (const std::string ext = lower_extension(*file);
+                 !ext.empty() && ext != ".urdf" && ext != ".json") {
+        // io::load_character's own rule names character files alone; this command reads more
+        throw core::ModelError(
+            {*file + ": unknown file type '" + ext + "' (rule: " + kReads + ")"});
       } else {
         const io::LoadResult loaded = io::load_character(*file);
         out = character_summary(*loaded.model, loaded.warnings);

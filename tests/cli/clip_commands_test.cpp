@@ -215,6 +215,22 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
   EXPECT_NE(bad.err.find("nothing.bvh"), std::string::npos) << bad.err;
 }
 
+TEST(InfoCommand, AFileOfAnotherKindIsRefusedNamingEveryKindItReads) {
+  gltf_test::TempDir dir;
+  {
+    std::ofstream f(dir.path("duck.zae"), std::ios::binary);
+    f << "PK";
+  }
+  const Outcome zae = pindrag(dir, "info " + dir.path("duck.zae"));
+  EXPECT_EQ(zae.status, 1);
+  EXPECT_NE(zae.err.find(dir.path("duck.zae") +
+                         ": unknown file type '.zae' (rule: pindrag info "
+                         "reads .urdf and .json characters, .bvh, .gltf, .glb, .fbx and .dae "
+                         "clips, .c3d marker trials"),
+            std::string::npos)
+      << zae.err;
+}
+
 TEST(InfoCommand, MarkerTrialsReportTimingUnitsAndMissingSamplesPerLabel) {
   PINDRAG_REQUIRE_DATA_DIR();
   gltf_test::TempDir dir;
