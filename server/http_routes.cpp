@@ -299,8 +299,13 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
             return send_error(res, 400, e.what());
           }
         }
+        std::vector<UploadResource> resources;
+        const auto [first, last] = req.files.equal_range("resource");
+        for (auto it = first; it != last; ++it) {
+          resources.push_back({it->second.filename, it->second.content});
+        }
         session = session_from_upload("character", file.filename, file.content, ctx.temp_root,
-                                      ctx.uploads, bvh_scale);
+                                      ctx.uploads, bvh_scale, resources);
       } else {
         if (req.body.size() > kMaxJsonBodyBytes)
           return send_error(res, 413, "body: larger than 1 MiB");

@@ -16,6 +16,7 @@
 #include "io/c3d.hpp"
 #include "io/model_file.hpp"
 #include "server/security.hpp"
+#include "server/upload_resources.hpp"
 
 namespace server {
 namespace fs = std::filesystem;
@@ -29,7 +30,8 @@ std::string extension_of(const std::string& file_name) {
   return ext;
 }
 
-// A private folder holding one uploaded file; removed with everything in it when it goes.
+// A private folder holding one uploaded file (and the files it references); removed with
+// everything in it when it goes.
 class TempUpload {
  public:
   TempUpload(const std::string& temp_root, const std::string& ext, const std::string& bytes) {
@@ -40,19 +42,11 @@ class TempUpload {
       throw std::system_error(errno, std::generic_category(), pattern);
     dir_ = pattern;
     file_ = (dir_ / ("upload" + ext)).string();
-    const int fd =
-        ::open(file_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
-    if (fd < 0) throw std::system_error(errno, std::generic_category(), file_);
-    size_t written = 0;
-    while (written < bytes.size()) {
-      const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-      if (n <= 0) {
-        ::close(fd);
-        throw std::system_error(errno, std::generic_category(), file_);
-      }
-      written += static_cast<size_t>(n);
-    }
-    ::close(fd);
+    write_new(file_, bytes);
+  }
+  /// A file beside the upload, by a name check_upload_resources accepted.
+  void add(const std::string& name, const std::string& bytes) {
+    write_new((dir_ / name).string(), bytes);
   }
   ~TempUpload() {
     std::error_code ec;
@@ -63,6 +57,21 @@ class TempUpload {
   const std::string& file() const { return file_; }
 
  private:
+  static void write_new(const std::string& path, const std::string& bytes) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
+    if (fd < 0) throw std::system_error(errno, std::generic_category(), path);
+    size_t written = 0;
+    while (written < bytes.size()) {
+      const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+      if (n <= 0) {
+        ::close(fd);
+        throw std::system_error(errno, std::generic_category(), path);
+      }
+      written += static_cast<size_t>(n);
+    }
+    ::close(fd);
+  }
+
   fs::path dir_;
   std::string file_;
 };
@@ -179,12 +188,14 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   return session;
 }
 
-std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
-                                                       const std::string& file_name,
-                                                       const std::string& bytes,
-                                                       const std::string& temp_root,
-                                                       const UploadRules& rules,
-                                                       std::optional<double> bvh_scale) {
+std::unique_ptr<animator::Session> session_from_upload(
+    const std::string& field,
+    const std::string& file_name,
+    const std::string& bytes,
+    const std::string& temp_root,
+    const UploadRules& rules,
+    std::optional<double> bvh_scale,
+    const std::vector<UploadResource>& resources) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   if (ext != ".urdf" && ext != ".json" && ext != ".bvh" && !is_assimp_format(ext)) {
@@ -193,8 +204,11 @@ std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
                  "\": unsupported file type (rule: .urdf, .json, .bvh, .glb, .gltf, .fbx or .dae)");
   }
   check_upload(field, shown, ext, bytes, rules.caps);
+  const std::vector<StoredResource> stored =
+      check_upload_resources(field, shown, ext, bytes, resources, rules.caps);
   const std::string name = safe_file_name(fs::path(file_name).stem().string(), "character");
   TempUpload upload(temp_root, ext, bytes);
+  for (const StoredResource& r : stored) upload.add(r.name, r.resource->bytes);
   try {
     return session_from_file(upload.file(), name, rules.limits, bvh_scale);
   } catch (const std::exception& e) {
@@ -218,6 +232,8 @@ MotionUpload load_motion(const std::string& field,
                          const core::Model& character,
                          const std::string& temp_root,
                          const UploadRules& rules) {
+  // a clip comes alone: a .gltf whose buffers are other files is refused naming them
+  check_upload_resources(field, shown, ext, bytes, {}, rules.caps);
   TempUpload upload(temp_root, ext, bytes);
   try {
     if (ext == ".bvh") {

@@ -16,6 +16,7 @@
 #include "animator/joint_names.hpp"
 #include "animator/session.hpp"
 #include "core/clip.hpp"
+#include "server/upload_resources.hpp"
 
 namespace server {
 
@@ -68,13 +69,17 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
 /// a BVH or an animated glTF/FBX/COLLADA file also brings its first clip.
 /// `field` names the form field in messages. A file over its type's cap is refused with 413
 /// naming the cap and its setting; a clip over the budget with 422 naming the limit.
+/// `resources`: the files a .gltf references, stored beside it for the import
+/// (check_upload_resources has the rules).
 /// @throws UploadError
-std::unique_ptr<animator::Session> session_from_upload(const std::string& field,
-                                                       const std::string& file_name,
-                                                       const std::string& bytes,
-                                                       const std::string& temp_root,
-                                                       const UploadRules& rules = {},
-                                                       std::optional<double> bvh_scale = {});
+std::unique_ptr<animator::Session> session_from_upload(
+    const std::string& field,
+    const std::string& file_name,
+    const std::string& bytes,
+    const std::string& temp_root,
+    const UploadRules& rules = {},
+    std::optional<double> bvh_scale = {},
+    const std::vector<UploadResource>& resources = {});
 
 /// The first clip of an uploaded motion file (.bvh, .glb, .gltf, .fbx, .dae), or a marker trial
 /// (.c3d) fitted onto `model` with its bundled marker set (animator::fit_trial; a character

@@ -18,6 +18,7 @@
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
 #include "io/gltf.hpp"
+#include "tests/io/gltf_reader.hpp"
 #include "tests/server/ws_test_client.hpp"
 
 namespace {
@@ -167,6 +168,61 @@ TEST_F(LimitsTest, MotionOverTheClipBudgetIsRefusedNamingTheLimit) {
             std::string::npos)
       << error_of(res);
   EXPECT_EQ(server_->registry().size(), 0u);
+}
+
+// A .gltf whose buffer is a file beside it (as Blender's "glTF Separate" writes it) opens when
+// that file is sent with it as a "resource" field, and only then; resource names are plain
+// file names in the upload's own folder.
+TEST_F(LimitsTest, AGltfOpensWithTheBufferFilesSentBesideIt) {
+  start();
+  const auto m = core::build_human_figure({});
+  core::Clip clip;
+  clip.frames = {core::neutral_configuration(*m), core::neutral_configuration(*m)};
+  io::GltfExportOptions stick;
+  stick.stick_figure = true;
+  std::vector<std::string> errors;
+  gltf_test::Document doc =
+      gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr, stick), errors);
+  ASSERT_TRUE(errors.empty()) << errors.front();
+  doc.json["buffers"][0]["uri"] = "figure%20data.bin";  // percent-encoded, as URIs are
+  const std::string gltf = doc.json.dump();
+  const std::string bin(doc.bin.begin(), doc.bin.end());
+  auto upload = [&](const std::string& main_name, const std::string& main,
+                    const std::vector<std::pair<std::string, std::string>>& resources) {
+    httplib::MultipartFormDataItems items{{"character", main, main_name, "model/gltf+json"}};
+    for (const auto& [name, bytes] : resources) {
+      items.push_back({"resource", bytes, name, "application/octet-stream"});
+    }
+    return http().Post("/api/sessions", {{"Origin", origin()}}, items);
+  };
+  // alone: refused before any import, naming the buffer and what to do
+  auto res = upload("figure.gltf", gltf, {});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 422);
+  EXPECT_EQ(error_of(res),
+            "character: \"figure.gltf\" references the buffer \"figure_data.bin\", which was not "
+            "sent with it (rule: a .gltf comes with the files its buffers name, beside it: choose "
+            "them together in the page, or upload the .glb)");
+  // a resource whose name leaves the folder, or is the stored upload's own name
+  for (const std::string bad :
+       {"../figure data.bin", "sub/figure data.bin", ".hidden.bin", "upload.gltf"}) {
+    res = upload("figure.gltf", gltf, {{bad, bin}, {"figure data.bin", bin}});
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 400) << bad;
+    EXPECT_NE(error_of(res).find("is not a plain file name"), std::string::npos) << error_of(res);
+  }
+  // resources with a file that references none
+  res = upload("walk.bvh", bvh_text(20), {{"figure data.bin", bin}});
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 400);
+  EXPECT_NE(error_of(res).find("only a .gltf is sent with resource files"), std::string::npos)
+      << error_of(res);
+  EXPECT_EQ(server_->registry().size(), 0u);
+  // with its buffer: created, the figure's skeleton and its two frames
+  res = upload("figure.gltf", gltf, {{"figure data.bin", bin}});
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 201) << res->body;
+  EXPECT_EQ(server_->registry().size(), 1u);
 }
 
 TEST_F(LimitsTest, AnEditOverALimitGetsAnErrorNamingIt) {

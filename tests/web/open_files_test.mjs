@@ -145,6 +145,48 @@ test('a malformed character file is refused naming the file; the session stays',
   await context.close();
 });
 
+test('a .gltf chosen together with its .bin opens; chosen alone it is refused naming the buffer', async () => {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+  const { page, problems } = await openTab(context);
+  const before = await sessionOf(page);
+  // this session's figure exported as .gltf, its buffer then moved into a file beside it (the
+  // layout of Blender's "glTF Separate")
+  const res = await fetch(`${server.url}api/sessions/${before.id}/export?format=gltf`, { headers: { 'X-Session-Token': before.token } });
+  assert.equal(res.status, 200);
+  const doc = await res.json();
+  const uri = doc.buffers[0].uri;
+  const dir = path.join(out, 'separate');
+  fs.mkdirSync(dir, { recursive: true });
+  const gltf = path.join(dir, 'figure.gltf');
+  const bin = path.join(dir, 'figure.bin');
+  fs.writeFileSync(bin, Buffer.from(uri.slice(uri.indexOf(',') + 1), 'base64'));
+  doc.buffers[0].uri = 'figure.bin';
+  fs.writeFileSync(gltf, JSON.stringify(doc));
+
+  // alone: refused, naming the buffer it needs; this session stays
+  const storedBefore = await storedIds();
+  await openFileFromDialog(page, gltf);
+  await page.waitForFunction(() => /422/.test(document.querySelector('#open-dialog .open-status')?.textContent || ''), null, {
+    timeout: 20000,
+  });
+  const message = await page.$eval('#open-dialog .open-status', (e) => e.textContent);
+  assert.match(message, /references the buffer "figure\.bin", which was not sent with it/);
+  assert.equal((await sessionOf(page)).id, before.id);
+  assert.deepEqual((await storedIds()).sort(), storedBefore.sort(), 'no session was made');
+
+  // chosen together (in either order): a new session on the skinned figure
+  await page.setInputFiles('#open-character-file', [bin, gltf]);
+  const opened = await switchedFrom(page, before.id);
+  assert.equal(opened.snapshot.character.name, 'figure');
+  assert.equal(opened.snapshot.character.skinned, true);
+  assert.deepEqual(
+    opened.snapshot.character.links.slice(0, 3).map((l) => l.name),
+    ['pelvis', 'abdomen', 'chest'],
+  );
+  assert.deepEqual(problems, []);
+  await context.close();
+});
+
 test('Load clip with another skeleton offers to open it as its own character, clip and all', { skip: noData }, async () => {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
   const { page, problems } = await openTab(context);

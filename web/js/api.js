@@ -51,10 +51,12 @@ export function createApi() {
     },
 
     /** A new session on a character file (URDF, JSON, BVH, glTF/GLB, FBX, DAE): {id, token}.
-     *  `units`: a BVH file's unit (auto, m, cm, mm, in, cmu); auto guesses it from the figure's size. */
-    async createSessionFromFile(file, units = 'auto') {
+     *  `units`: a BVH file's unit (auto, m, cm, mm, in, cmu); auto guesses it from the figure's size.
+     *  `resources`: the files a .gltf references beside it (its .bin buffers, its images). */
+    async createSessionFromFile(file, units = 'auto', resources = []) {
       const form = new FormData();
       form.append('character', file, file.name);
+      for (const r of resources) form.append('resource', r, r.name);
       if (/\.bvh$/i.test(file.name) && units !== 'auto') form.append('units', units);
       const res = await fetch('/api/sessions', { method: 'POST', headers: api.keyHeaders(), body: form });
       if (!res.ok) throw await failure(`open ${file.name}`, res);

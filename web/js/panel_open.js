@@ -11,6 +11,9 @@ import { h, uploadTooLarge } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
 
 const ACCEPTED_CHARACTERS = '.urdf,.json,.bvh,.glb,.gltf,.fbx,.dae';
+const CHARACTER_FILE = /\.(urdf|json|bvh|glb|gltf|fbx|dae)$/i;
+// what a .gltf may reference beside it (its buffers and images), chosen together with it
+const GLTF_RESOURCES = '.bin,.png,.jpg,.jpeg,.webp,.ktx2';
 const BVH_UNITS = [
   ['auto', 'guess from its height'],
   ['m', 'metres'],
@@ -61,17 +64,29 @@ export function createOpenDialog(state, api, switchSession) {
   }
 
   function fileButton() {
-    const input = h('input#open-character-file', { type: 'file', accept: ACCEPTED_CHARACTERS, hidden: true });
+    const input = h('input#open-character-file', {
+      type: 'file',
+      accept: `${ACCEPTED_CHARACTERS},${GLTF_RESOURCES}`,
+      multiple: true,
+      hidden: true,
+    });
     input.addEventListener('change', () => {
-      const file = input.files[0];
+      const files = [...input.files];
       input.value = '';
-      if (!file) return;
+      if (!files.length) return;
+      // one character file; the rest are the files a .gltf references (a "glTF Separate" export)
+      const file = files.find((f) => CHARACTER_FILE.test(f.name));
+      if (!file) {
+        notify(`choose a character file (${ACCEPTED_CHARACTERS}); a .gltf's buffers and images go with it`, 'error');
+        return;
+      }
       const tooLarge = uploadTooLarge(state, file);
       if (tooLarge) {
         notify(tooLarge, 'error');
         return;
       }
-      openCreated(api.createSessionFromFile(file, units.value), file.name);
+      const resources = files.filter((f) => f !== file);
+      openCreated(api.createSessionFromFile(file, units.value, resources), file.name);
     });
     const button = h('button#open-file', { type: 'button', onclick: () => input.click() }, 'Character file…');
     const units = h(

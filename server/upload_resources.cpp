@@ -1,0 +1,135 @@
+#include "server/upload_resources.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "server/security.hpp"
+#include "server/uploads.hpp"
+
+namespace server {
+
+namespace {
+
+// the name is a file in the upload's own folder and nothing else
+bool plain_file_name(const std::string& name) {
+  if (name.empty() || name.size() > 255 || name.front() == '.') return false;
+  return std::none_of(name.begin(), name.end(), [](unsigned char c) {
+    return c < 0x20 || c == 0x7f || c == '/' || c == '\\';
+  });
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// RFC 3986 percent-decoding of a relative URI ("my%20skin.bin" names "my skin.bin")
+std::string percent_decoded(const std::string& uri) {
+  std::string out;
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += uri[i];
+    }
+  }
+  return out;
+}
+
+// glTF 2.0 §3.3.2 (buffers): a buffer without a URI is the GLB's own chunk; a data: URI is
+// embedded; any other URI names a file relative to the .gltf. Unparsable text is left to the
+// importer, which names what is wrong with it.
+struct BufferFile {
+  std::string uri;   // as the .gltf writes it
+  std::string name;  // the file it names (percent-decoded)
+};
+std::vector<BufferFile> referenced_buffer_files(const std::string& gltf_text) {
+  std::vector<BufferFile> files;
+  const nlohmann::json doc = nlohmann::json::parse(gltf_text, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object() || !doc.contains("buffers") ||
+      !doc["buffers"].is_array()) {
+    return files;
+  }
+  for (const auto& buffer : doc["buffers"]) {
+    if (!buffer.is_object() || !buffer.contains("uri") || !buffer["uri"].is_string()) continue;
+    const std::string uri = buffer["uri"].get<std::string>();
+    if (uri.rfind("data:", 0) == 0) continue;
+    files.push_back({uri, percent_decoded(uri)});
+  }
+  return files;
+}
+
+}  // namespace
+
+std::vector<StoredResource> check_upload_resources(const std::string& field,
+                                                   const std::string& shown,
+                                                   const std::string& ext,
+                                                   const std::string& bytes,
+                                                   const std::vector<UploadResource>& resources,
+                                                   const UploadCaps& caps) {
+  if (!resources.empty() && ext != ".gltf") {
+    throw UploadError(400, "resource: \"" + shown + "\" references no other files (rule: only a " +
+                               ".gltf is sent with resource files, its buffers and images)");
+  }
+  if (resources.size() > static_cast<std::size_t>(kMaxUploadResources)) {
+    throw UploadError(400, "resource: " + std::to_string(resources.size()) + " files sent with \"" +
+                               shown + "\" (rule: at most " + std::to_string(kMaxUploadResources) +
+                               ")");
+  }
+  std::set<std::string> names;
+  std::size_t total = bytes.size();
+  for (const UploadResource& r : resources) {
+    const std::string name = safe_file_name(r.name, "?");
+    if (!plain_file_name(r.name) || lower(r.name) == "upload.gltf") {
+      throw UploadError(400, "resource: \"" + name +
+                                 "\" is not a plain file name (rule: a name in the .gltf's own "
+                                 "folder: no folder, not hidden, no control characters, not "
+                                 "upload.gltf)");
+    }
+    if (!names.insert(r.name).second) {
+      throw UploadError(400, "resource: \"" + name + "\" is sent twice");
+    }
+    total += r.bytes.size();
+  }
+  if (total > caps.gltf) {
+    throw UploadError(413, field + ": \"" + shown + "\" and its " +
+                               std::to_string(resources.size()) + " resource files are " +
+                               byte_text(total) + ", over the upload cap of " +
+                               byte_text(caps.gltf) +
+                               " for .gltf files (set by pindrag serve --max-upload-gltf)");
+  }
+  std::vector<StoredResource> stored;
+  for (const UploadResource& r : resources) stored.push_back({r.name, &r});
+  if (ext != ".gltf") return stored;
+  for (const BufferFile& buffer : referenced_buffer_files(bytes)) {
+    const std::string& uri = buffer.uri;
+    const std::string& file = buffer.name;
+    if (names.count(file)) {
+      // assimp opens the URI's text as it stands: an encoded name is stored under it as well
+      if (uri != file && plain_file_name(uri) && !names.count(uri)) {
+        const auto r = std::find_if(resources.begin(), resources.end(),
+                                    [&](const UploadResource& x) { return x.name == file; });
+        stored.push_back({uri, &*r});
+        names.insert(uri);
+      }
+      continue;
+    }
+    const std::string why =
+        file.find('/') != std::string::npos || file.find('\\') != std::string::npos
+            ? " in another folder"
+            : ", which was not sent with it";
+    throw UploadError(422, field + ": \"" + shown + "\" references the buffer \"" +
+                               safe_file_name(file, "?") + "\"" + why +
+                               " (rule: a .gltf comes with the files its buffers name, beside it: "
+                               "choose them together in the page, or upload the .glb)");
+  }
+  return stored;
+}
+
+}  // namespace server
