@@ -53,6 +53,16 @@ void send_error(httplib::Response& res, int status, const std::string& message) 
   send_json(res, status, json{{"error", message}});
 }
 
+// the files sent beside an uploaded file (form fields "resource"), for a .gltf's buffers and images
+std::vector<UploadResource> resource_fields(const httplib::Request& req) {
+  std::vector<UploadResource> resources;
+  const auto [first, last] = req.files.equal_range("resource");
+  for (auto it = first; it != last; ++it) {
+    resources.push_back({it->second.filename, it->second.content});
+  }
+  return resources;
+}
+
 // Whether the request is a multipart form with a file field "clip"; else a 400 is sent.
 bool has_clip_file(const httplib::Request& req, httplib::Response& res) {
   if (req.is_multipart_form_data() && req.has_file("clip")) return true;
@@ -299,13 +309,8 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
             return send_error(res, 400, e.what());
           }
         }
-        std::vector<UploadResource> resources;
-        const auto [first, last] = req.files.equal_range("resource");
-        for (auto it = first; it != last; ++it) {
-          resources.push_back({it->second.filename, it->second.content});
-        }
         session = session_from_upload("character", file.filename, file.content, ctx.temp_root,
-                                      ctx.uploads, bvh_scale, resources);
+                                      ctx.uploads, bvh_scale, resource_fields(req));
       } else {
         if (req.body.size() > kMaxJsonBodyBytes)
           return send_error(res, 413, "body: larger than 1 MiB");
@@ -412,8 +417,9 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
           const bool retarget = req.get_param_value("retarget") == "1";
           std::vector<animator::MappingEntry> mapping;
           if (req.has_file("mapping")) mapping = mapping_field(req.get_file_value("mapping"));
-          ClipUpload upload = clip_from_upload("clip", file.filename, file.content, actor->model(),
-                                               ctx.temp_root, ctx.uploads, retarget, mapping);
+          ClipUpload upload =
+              clip_from_upload("clip", file.filename, file.content, actor->model(), ctx.temp_root,
+                               ctx.uploads, retarget, mapping, resource_fields(req));
           json answer{{"frames", upload.clip.size()}, {"frame_time", upload.clip.frame_time}};
           if (upload.markers) answer["markers"] = upload.markers->set.size();
           auto shared = std::make_shared<ClipUpload>(std::move(upload));
@@ -440,7 +446,7 @@ void register_api(httplib::Server& http, const RouteContext& ctx) {
                 const httplib::MultipartFormData file = req.get_file_value("clip");
                 send_json(res, 200,
                           clip_correspondence("clip", file.filename, file.content, actor->model(),
-                                              ctx.temp_root, ctx.uploads));
+                                              ctx.temp_root, ctx.uploads, resource_fields(req)));
               } catch (const UploadError& e) {
                 send_error(res, e.status, e.what());
               }

@@ -231,10 +231,12 @@ MotionUpload load_motion(const std::string& field,
                          const std::string& bytes,
                          const core::Model& character,
                          const std::string& temp_root,
-                         const UploadRules& rules) {
-  // a clip comes alone: a .gltf whose buffers are other files is refused naming them
-  check_upload_resources(field, shown, ext, bytes, {}, rules.caps);
+                         const UploadRules& rules,
+                         const std::vector<UploadResource>& resources) {
+  const std::vector<StoredResource> stored =
+      check_upload_resources(field, shown, ext, bytes, resources, rules.caps);
   TempUpload upload(temp_root, ext, bytes);
+  for (const StoredResource& r : stored) upload.add(r.name, r.resource->bytes);
   try {
     if (ext == ".bvh") {
       io::BvhImport imported = load_bvh(upload.file(), rules.limits, &character);
@@ -271,14 +273,16 @@ ClipUpload clip_from_upload(const std::string& field,
                             const std::string& temp_root,
                             const UploadRules& rules,
                             bool retarget,
-                            const std::vector<animator::MappingEntry>& mapping) {
+                            const std::vector<animator::MappingEntry>& mapping,
+                            const std::vector<UploadResource>& resources) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   check_motion_type(field, shown, ext, /*c3d_allowed=*/true);
   check_upload(field, shown, ext, bytes, rules.caps);
   if (ext == ".c3d") {
     // a marker trial: read from memory (no assimp, no temporary file) and fitted onto the
-    // session's character
+    // session's character; it references no other files
+    check_upload_resources(field, shown, ext, bytes, resources, rules.caps);
     try {
       const io::C3dTrial trial = io::parse_c3d(bytes, shown, animator::clip_budget(rules.limits));
       animator::FittedTrial fitted = animator::fit_trial(trial, model);
@@ -287,7 +291,7 @@ ClipUpload clip_from_upload(const std::string& field,
       throw UploadError(422, field + ": " + std::string(e.what()));
     }
   }
-  MotionUpload motion = load_motion(field, shown, ext, bytes, model, temp_root, rules);
+  MotionUpload motion = load_motion(field, shown, ext, bytes, model, temp_root, rules, resources);
   if (!same_skeleton(*motion.model, model) && retarget) {
     try {
       animator::RetargetOptions options;
@@ -315,12 +319,14 @@ nlohmann::json clip_correspondence(const std::string& field,
                                    const std::string& bytes,
                                    const core::Model& model,
                                    const std::string& temp_root,
-                                   const UploadRules& rules) {
+                                   const UploadRules& rules,
+                                   const std::vector<UploadResource>& resources) {
   const std::string ext = extension_of(file_name);
   const std::string shown = safe_file_name(file_name, "upload");
   check_motion_type(field, shown, ext, /*c3d_allowed=*/false);
   check_upload(field, shown, ext, bytes, rules.caps);
-  const MotionUpload motion = load_motion(field, shown, ext, bytes, model, temp_root, rules);
+  const MotionUpload motion =
+      load_motion(field, shown, ext, bytes, model, temp_root, rules, resources);
   const core::Model& S = *motion.model;
   const animator::Correspondence c = animator::guess_correspondence(S, model);
   nlohmann::json joints = nlohmann::json::array();

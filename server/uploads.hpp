@@ -87,7 +87,7 @@ std::unique_ptr<animator::Session> session_from_upload(
 /// `model` (same links, same joint types), else UploadError 422 (code "skeleton_differs") unless
 /// `retarget`: a clip of another skeleton is then retargeted onto `model`
 /// (animator/retarget.hpp), and one that cannot be (no recognisable legs) is a 422 naming why.
-/// Caps and budget as for session_from_upload. @throws UploadError
+/// Caps, budget and `resources` as for session_from_upload. @throws UploadError
 struct ClipUpload {
   core::Clip clip;
   std::shared_ptr<const animator::ClipMarkers> markers;  // a marker trial's, else null
@@ -101,7 +101,8 @@ ClipUpload clip_from_upload(const std::string& field,
                             const std::string& temp_root,
                             const UploadRules& rules = {},
                             bool retarget = false,
-                            const std::vector<animator::MappingEntry>& mapping = {});
+                            const std::vector<animator::MappingEntry>& mapping = {},
+                            const std::vector<UploadResource>& resources = {});
 
 /// The correspondence retargeting would guess for an uploaded motion file (.bvh, .glb, .gltf,
 /// .fbx, .dae) onto `model`, for the user to edit: {"source_convention", "target_convention",
@@ -113,6 +114,7 @@ nlohmann::json clip_correspondence(const std::string& field,
                                    const std::string& bytes,
                                    const core::Model& model,
                                    const std::string& temp_root,
-                                   const UploadRules& rules = {});
+                                   const UploadRules& rules = {},
+                                   const std::vector<UploadResource>& resources = {});
 
 }  // namespace server

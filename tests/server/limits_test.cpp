@@ -223,6 +223,24 @@ TEST_F(LimitsTest, AGltfOpensWithTheBufferFilesSentBesideIt) {
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 201) << res->body;
   EXPECT_EQ(server_->registry().size(), 1u);
+  // the same for a clip of a session: the mapping editor's guess reads the skeleton
+  const Created s = create_session();
+  auto correspondence = [&](bool with_buffer) {
+    httplib::MultipartFormDataItems items{{"clip", gltf, "figure.gltf", "model/gltf+json"}};
+    if (with_buffer) items.push_back({"resource", bin, "figure data.bin", ""});
+    return http().Post("/api/sessions/" + s.id + "/clip/correspondence",
+                       {{"X-Session-Token", s.token}, {"Origin", origin()}}, items);
+  };
+  res = correspondence(false);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 422);
+  EXPECT_NE(error_of(res).find("clip: \"figure.gltf\" references the buffer \"figure_data.bin\""),
+            std::string::npos)
+      << error_of(res);
+  res = correspondence(true);
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_FALSE(json::parse(res->body).at("joints").empty());
 }
 
 TEST_F(LimitsTest, AnEditOverALimitGetsAnErrorNamingIt) {

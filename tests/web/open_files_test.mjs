@@ -145,7 +145,7 @@ test('a malformed character file is refused naming the file; the session stays',
   await context.close();
 });
 
-test('a .gltf chosen together with its .bin opens; chosen alone it is refused naming the buffer', async () => {
+test('a .gltf chosen together with its .bin opens as a character or a clip; alone it is refused naming the buffer', async () => {
   const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
   const { page, problems } = await openTab(context);
   const before = await sessionOf(page);
@@ -162,6 +162,17 @@ test('a .gltf chosen together with its .bin opens; chosen alone it is refused na
   fs.writeFileSync(bin, Buffer.from(uri.slice(uri.indexOf(',') + 1), 'base64'));
   doc.buffers[0].uri = 'figure.bin';
   fs.writeFileSync(gltf, JSON.stringify(doc));
+
+  // as a clip of this human48 session: another skeleton (its 21 bodies), which the mapping editor
+  // reads with its buffer
+  await page.setInputFiles('#clip-file', [gltf, bin]);
+  await page.waitForSelector('#open-dialog:not([hidden]) #edit-mapping', { timeout: 30000 });
+  await page.click('#edit-mapping');
+  await page.waitForSelector('#mapping-table select', { timeout: 30000 });
+  assert.equal(await page.$eval('#mapping-table select[data-source="pelvis"]', (e) => e.value), 'pelvis');
+  await page.click('#open-dialog button:has-text("Back")');
+  await page.click('#open-dialog button:has-text("Cancel")');
+  await page.waitForSelector('#open-dialog', { state: 'hidden' });
 
   // alone: refused, naming the buffer it needs; this session stays
   const storedBefore = await storedIds();

@@ -108,9 +108,10 @@ export function createApi() {
     },
 
     /** The correspondence retargeting would guess for a clip file (POST .../clip/correspondence). */
-    async clipCorrespondence(file) {
+    async clipCorrespondence(file, resources = []) {
       const form = new FormData();
       form.append('clip', file, file.name);
+      for (const r of resources) form.append('resource', r, r.name);
       const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip/correspondence`, {
         method: 'POST',
         headers: api.headers(),
@@ -128,10 +129,12 @@ export function createApi() {
     },
 
     /** Loads a clip onto the character; `retarget`: a clip of another skeleton is retargeted onto it,
-     *  with `mapping` ({source joint: target link or null}) over the guessed correspondence. */
-    async uploadClip(file, { retarget = false, mapping = null } = {}) {
+     *  with `mapping` ({source joint: target link or null}) over the guessed correspondence;
+     *  `resources`: the files a .gltf clip references beside it (its .bin buffers, its images). */
+    async uploadClip(file, { retarget = false, mapping = null, resources = [] } = {}) {
       const form = new FormData();
       form.append('clip', file, file.name);
+      for (const r of resources) form.append('resource', r, r.name);
       if (mapping) form.append('mapping', new Blob([JSON.stringify(mapping)], { type: 'application/json' }), 'mapping.json');
       const query = retarget ? '?retarget=1' : '';
       const res = await fetch(`/api/sessions/${encodeURIComponent(api.sessionId)}/clip${query}`, {

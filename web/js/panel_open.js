@@ -7,13 +7,11 @@
 // edits, saves and loads: which of the clip's joints drives which of the character's links), or
 // leave it.
 
-import { h, uploadTooLarge } from './panel_util.js';
+import { h, uploadTooLarge, GLTF_RESOURCES } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
 
 const ACCEPTED_CHARACTERS = '.urdf,.json,.bvh,.glb,.gltf,.fbx,.dae';
 const CHARACTER_FILE = /\.(urdf|json|bvh|glb|gltf|fbx|dae)$/i;
-// what a .gltf may reference beside it (its buffers and images), chosen together with it
-const GLTF_RESOURCES = '.bin,.png,.jpg,.jpeg,.webp,.ktx2';
 const BVH_UNITS = [
   ['auto', 'guess from its height'],
   ['m', 'metres'],
@@ -169,12 +167,12 @@ export function createOpenDialog(state, api, switchSession) {
   }
 
   // the clip retargeted onto this character (animator/retarget.hpp): it becomes the clip here
-  async function retargetHere(file, mapping = null) {
+  async function retargetHere(file, mapping = null, resources = []) {
     const status = card.querySelector('.open-status');
     if (status) status.textContent = `retargeting ${file.name}…`;
     card.querySelectorAll('button, select').forEach((b) => (b.disabled = true));
     try {
-      const r = await api.uploadClip(file, { retarget: true, mapping });
+      const r = await api.uploadClip(file, { retarget: true, mapping, resources });
       notify(`${file.name} retargeted: ${r.frames} frames at ${(1 / r.frame_time).toFixed(1)} fps`);
       close();
     } catch (err) {
@@ -187,7 +185,7 @@ export function createOpenDialog(state, api, switchSession) {
   /** The mapping editor: one row per moving joint of the clip, with the character's link it
    *  drives (the server's guess first); saved and loaded as the mapping file of
    *  docs/retargeting.md ({"source joint": "target link" or null}). */
-  async function editMapping(file, message) {
+  async function editMapping(file, message, resources = []) {
     const setStatus = (text) => {
       const status = card.querySelector('.open-status');
       if (status) status.textContent = text;
@@ -195,7 +193,7 @@ export function createOpenDialog(state, api, switchSession) {
     setStatus(`reading ${file.name}…`);
     let guess;
     try {
-      guess = await api.clipCorrespondence(file);
+      guess = await api.clipCorrespondence(file, resources);
     } catch (err) {
       setStatus(err.message);
       notify(err.message, 'error');
@@ -251,17 +249,17 @@ export function createOpenDialog(state, api, switchSession) {
       h(
         'div.open-actions',
         {},
-        h('button#retarget-mapped', { type: 'button', onclick: () => retargetHere(file, current()) }, 'Retarget with this mapping'),
+        h('button#retarget-mapped', { type: 'button', onclick: () => retargetHere(file, current(), resources) }, 'Retarget with this mapping'),
         h('button#mapping-save', { type: 'button', title: 'Download the mapping as JSON (pindrag retarget --mapping reads it too)', onclick: save }, 'Save mapping…'),
         h('button#mapping-load', { type: 'button', title: 'Set the rows from a mapping file', onclick: () => loadInput.click() }, 'Load mapping…'),
-        h('button', { type: 'button', onclick: () => offerOwnCharacter(file, message) }, 'Back'),
+        h('button', { type: 'button', onclick: () => offerOwnCharacter(file, message, resources) }, 'Back'),
       ),
     );
   }
 
   /** A clip of another skeleton was refused: offer to open the file as its own character, or to
-   *  retarget it onto this one. */
-  function offerOwnCharacter(file, message) {
+   *  retarget it onto this one. `resources`: the files a .gltf clip references, chosen with it. */
+  function offerOwnCharacter(file, message, resources = []) {
     const character = state.character?.name || 'this character';
     show(
       h('h2', {}, 'Another skeleton'),
@@ -271,9 +269,9 @@ export function createOpenDialog(state, api, switchSession) {
       h(
         'div.open-actions',
         {},
-        h('button#open-as-own', { type: 'button', onclick: () => openCreated(api.createSessionFromFile(file), file.name) }, 'Open it as its own character'),
-        h('button#retarget-clip', { type: 'button', onclick: () => retargetHere(file) }, `Retarget it onto ${character}`),
-        h('button#edit-mapping', { type: 'button', title: 'See and change which joint drives which link before retargeting', onclick: () => editMapping(file, message) }, 'Edit the mapping…'),
+        h('button#open-as-own', { type: 'button', onclick: () => openCreated(api.createSessionFromFile(file, 'auto', resources), file.name) }, 'Open it as its own character'),
+        h('button#retarget-clip', { type: 'button', onclick: () => retargetHere(file, null, resources) }, `Retarget it onto ${character}`),
+        h('button#edit-mapping', { type: 'button', title: 'See and change which joint drives which link before retargeting', onclick: () => editMapping(file, message, resources) }, 'Edit the mapping…'),
         h('button', { type: 'button', onclick: close }, 'Cancel'),
       ),
     );

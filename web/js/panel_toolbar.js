@@ -1,11 +1,12 @@
 // The top bar: the character, Open…, undo/redo, pin mode, gizmo mode, clip upload, export buttons
 // and the connection badge.
 
-import { h, uploadTooLarge } from './panel_util.js';
+import { h, uploadTooLarge, GLTF_RESOURCES } from './panel_util.js';
 import { PIN_MODES, EXPORT_FORMATS } from './protocol.js';
 
 // a marker trial (.c3d) is fitted onto the character by the server (docs/marker-fitting.md)
 const ACCEPTED_CLIPS = '.bvh,.glb,.gltf,.fbx,.dae,.c3d';
+const CLIP_FILE = /\.(bvh|glb|gltf|fbx|dae|c3d)$/i;
 
 function segmented(name, options, current, onPick) {
   const buttons = options.map(([value, label, title]) =>
@@ -46,12 +47,19 @@ export function createToolbar(state, api, connection, actions, openDialog) {
   signals.gizmoModeChanged.add(gizmoMode.select);
 
   // clip upload
-  const fileInput = h('input#clip-file', { type: 'file', accept: ACCEPTED_CLIPS, hidden: true });
+  const fileInput = h('input#clip-file', { type: 'file', accept: `${ACCEPTED_CLIPS},${GLTF_RESOURCES}`, multiple: true, hidden: true });
   const uploadButton = h('button#upload-clip', { type: 'button', title: 'Load a clip (BVH, glTF, FBX) or fit a marker trial (C3D) onto this character', onclick: () => fileInput.click() }, 'Load clip…');
   fileInput.addEventListener('change', async () => {
-    const file = fileInput.files[0];
+    const files = [...fileInput.files];
     fileInput.value = '';
-    if (!file) return;
+    if (!files.length) return;
+    // one clip file; the rest are the files a .gltf references (a "glTF Separate" export)
+    const file = files.find((f) => CLIP_FILE.test(f.name));
+    if (!file) {
+      signals.notify.dispatch({ text: `choose a clip file (${ACCEPTED_CLIPS}); a .gltf's buffers and images go with it`, kind: 'error' });
+      return;
+    }
+    const resources = files.filter((f) => f !== file);
     const tooLarge = uploadTooLarge(state, file);
     if (tooLarge) {
       signals.notify.dispatch({ text: tooLarge, kind: 'error' });
@@ -59,10 +67,10 @@ export function createToolbar(state, api, connection, actions, openDialog) {
     }
     uploadButton.disabled = true;
     try {
-      const r = await api.uploadClip(file);
+      const r = await api.uploadClip(file, { resources });
       signals.notify.dispatch({ text: `${file.name}: ${r.frames} frames at ${(1 / r.frame_time).toFixed(1)} fps`, kind: 'info' });
     } catch (err) {
-      if (err.code === 'skeleton_differs') openDialog.offerOwnCharacter(file, err.message);
+      if (err.code === 'skeleton_differs') openDialog.offerOwnCharacter(file, err.message, resources);
       else signals.notify.dispatch({ text: err.message, kind: 'error' });
     } finally {
       uploadButton.disabled = false;

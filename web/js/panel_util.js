@@ -34,6 +34,10 @@ export function fmt(x, digits = 1) {
   return Number.isFinite(x) ? x.toFixed(digits) : '–';
 }
 
+/** What a .gltf may reference beside it (its buffers and images): chosen together with it, these
+ *  are sent as its "resource" files (the file pickers' `accept` lists them). */
+export const GLTF_RESOURCES = '.bin,.png,.jpg,.jpeg,.webp,.ktx2';
+
 /** Why `file` cannot be uploaded to this server (over its largest upload cap), or null. */
 export function uploadTooLarge(state, file) {
   const limit = state.config?.limits?.upload_bytes;
