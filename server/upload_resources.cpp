@@ -42,23 +42,74 @@ std::string percent_decoded(const std::string& uri) {
   return out;
 }
 
+// The "uri" strings of the top-level "buffers" array's objects, read with nlohmann's SAX
+// interface: a 64 MiB .gltf of numbers would take several times its size as a DOM in the
+// server's own process (the import itself runs in a limited child).
+class BufferUris final : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  std::vector<std::string> uris;
+
+  bool start_object(std::size_t) override { return open(); }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override {
+    in_buffers_ = depth_ == 1 && top_key_ == "buffers";
+    return open();
+  }
+  bool end_array() override {
+    if (depth_ == 2) in_buffers_ = false;
+    return close();
+  }
+  bool key(string_t& k) override {
+    if (depth_ == 1) top_key_ = k;
+    uri_next_ = in_buffers_ && depth_ == 3 && k == "uri";
+    return true;
+  }
+  bool string(string_t& v) override {
+    if (uri_next_) uris.push_back(v);
+    return value();
+  }
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;
+  }
+
+ private:
+  bool open() {
+    ++depth_;
+    uri_next_ = false;
+    return true;
+  }
+  bool close() {
+    --depth_;
+    return true;
+  }
+  bool value() {
+    uri_next_ = false;
+    return true;
+  }
+  int depth_ = 0;            // containers open around the next event
+  std::string top_key_;      // the last key of the top-level object
+  bool in_buffers_ = false;  // inside the top-level "buffers" array
+  bool uri_next_ = false;    // the next value is a buffer's "uri"
+};
+
 // glTF 2.0 §3.3.2 (buffers): a buffer without a URI is the GLB's own chunk; a data: URI is
-// embedded; any other URI names a file relative to the .gltf. Unparsable text is left to the
-// importer, which names what is wrong with it.
+// embedded; any other URI names a file relative to the .gltf. Text that is not JSON is left to
+// the importer, which names what is wrong with it.
 struct BufferFile {
   std::string uri;   // as the .gltf writes it
   std::string name;  // the file it names (percent-decoded)
 };
 std::vector<BufferFile> referenced_buffer_files(const std::string& gltf_text) {
+  BufferUris reader;
+  if (!nlohmann::json::sax_parse(gltf_text, &reader)) return {};
   std::vector<BufferFile> files;
-  const nlohmann::json doc = nlohmann::json::parse(gltf_text, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object() || !doc.contains("buffers") ||
-      !doc["buffers"].is_array()) {
-    return files;
-  }
-  for (const auto& buffer : doc["buffers"]) {
-    if (!buffer.is_object() || !buffer.contains("uri") || !buffer["uri"].is_string()) continue;
-    const std::string uri = buffer["uri"].get<std::string>();
+  for (const std::string& uri : reader.uris) {
     if (uri.rfind("data:", 0) == 0) continue;
     files.push_back({uri, percent_decoded(uri)});
   }

@@ -41,6 +41,13 @@ TEST(UploadResources, EmbeddedAndChunkBuffersNeedNothingAFileBufferMustBeSent) {
   EXPECT_NE(resources_refusal(R"({"buffers": [{"uri": "bin/a.bin"}]})", {{"a.bin", "x"}})
                 .second.find("in another folder"),
             std::string::npos);
+  // only a buffer's own "uri": not an image's, an extension's or one elsewhere
+  EXPECT_EQ(resources_refusal(R"({"uri": "a.bin", "images": [{"uri": "skin.png"}],
+                                  "buffers": [{"byteLength": 1, "extras": {"uri": "b.bin"}}],
+                                  "extensions": {"buffers": [{"uri": "c.bin"}]}})",
+                              {})
+                .first,
+            0);
   // text that is not glTF JSON is the importer's to name
   EXPECT_EQ(resources_refusal("not json", {}).first, 0);
 }
