@@ -124,9 +124,10 @@ std::vector<StoredResource> check_upload_resources(const std::string& field,
                                                    const std::string& bytes,
                                                    const std::vector<UploadResource>& resources,
                                                    const UploadCaps& caps) {
-  if (!resources.empty() && ext != ".gltf") {
+  if (!resources.empty() && ext != ".gltf" && ext != ".glb" && ext != ".fbx" && ext != ".dae") {
     throw UploadError(400, "resource: \"" + shown + "\" references no other files (rule: only a " +
-                               ".gltf is sent with resource files, its buffers and images)");
+                               ".gltf, .glb, .fbx or .dae is sent with the files it references, "
+                               "its buffers and images)");
   }
   if (resources.size() > static_cast<std::size_t>(kMaxUploadResources)) {
     throw UploadError(400, "resource: " + std::to_string(resources.size()) + " files sent with \"" +
@@ -137,23 +138,24 @@ std::vector<StoredResource> check_upload_resources(const std::string& field,
   std::size_t total = bytes.size();
   for (const UploadResource& r : resources) {
     const std::string name = safe_file_name(r.name, "?");
-    if (!plain_file_name(r.name) || lower(r.name) == "upload.gltf") {
+    if (!plain_file_name(r.name) || lower(r.name) == "upload" + ext) {
       throw UploadError(400, "resource: \"" + name +
-                                 "\" is not a plain file name (rule: a name in the .gltf's own "
+                                 "\" is not a plain file name (rule: a name in the file's own "
                                  "folder: no folder, not hidden, no control characters, not "
-                                 "upload.gltf)");
+                                 "upload" +
+                                 ext + ", the name the upload is stored under)");
     }
     if (!names.insert(r.name).second) {
       throw UploadError(400, "resource: \"" + name + "\" is sent twice");
     }
     total += r.bytes.size();
   }
-  if (total > caps.gltf) {
-    throw UploadError(413, field + ": \"" + shown + "\" and its " +
-                               std::to_string(resources.size()) + " resource files are " +
-                               byte_text(total) + ", over the upload cap of " +
-                               byte_text(caps.gltf) +
-                               " for .gltf files (set by pindrag serve --max-upload-gltf)");
+  const UploadCap cap = upload_cap(caps, ext);
+  if (!resources.empty() && total > cap.bytes) {
+    throw UploadError(
+        413, field + ": \"" + shown + "\" and its " + std::to_string(resources.size()) +
+                 " resource files are " + byte_text(total) + ", over the upload cap of " +
+                 byte_text(cap.bytes) + " for " + ext + " files (set by " + cap.setting + ")");
   }
   std::vector<StoredResource> stored;
   for (const UploadResource& r : resources) stored.push_back({r.name, &r});

@@ -42,7 +42,13 @@ class TempUpload {
       throw std::system_error(errno, std::generic_category(), pattern);
     dir_ = pattern;
     file_ = (dir_ / ("upload" + ext)).string();
-    write_new(file_, bytes);
+    try {
+      write_new(file_, bytes);
+    } catch (...) {
+      std::error_code ec;
+      fs::remove_all(dir_, ec);  // the destructor does not run for a constructor that throws
+      throw;
+    }
   }
   /// A file beside the upload, by a name check_upload_resources accepted.
   void add(const std::string& name, const std::string& bytes) {
@@ -92,29 +98,13 @@ std::string rename_source(std::string message,
   return message;
 }
 
-// the cap of a file type and the setting that changes it
-struct Cap {
-  std::size_t bytes;
-  const char* setting;
-};
-
-Cap cap_of(const UploadCaps& caps, const std::string& ext) {
-  if (ext == ".urdf") return {caps.urdf, "pindrag serve --max-upload-urdf"};
-  if (ext == ".json") return {caps.json, "pindrag serve --max-upload-json"};
-  if (ext == ".bvh") return {caps.bvh, "pindrag serve --max-upload-bvh"};
-  if (ext == ".gltf" || ext == ".glb") return {caps.gltf, "pindrag serve --max-upload-gltf"};
-  if (ext == ".fbx") return {caps.fbx, "pindrag serve --max-upload-fbx"};
-  if (ext == ".c3d") return {caps.c3d, "pindrag serve --max-upload-c3d"};
-  return {caps.dae, "pindrag serve --max-upload-dae"};
-}
-
 void check_upload(const std::string& field,
                   const std::string& shown,
                   const std::string& ext,
                   const std::string& bytes,
                   const UploadCaps& caps) {
   if (bytes.empty()) throw UploadError(400, field + ": \"" + shown + "\" is empty");
-  const Cap cap = cap_of(caps, ext);
+  const UploadCap cap = upload_cap(caps, ext);
   if (bytes.size() > cap.bytes) {
     throw UploadError(413, field + ": \"" + shown + "\" is " + byte_text(bytes.size()) +
                                ", over the upload cap of " + byte_text(cap.bytes) + " for " + ext +
@@ -149,6 +139,16 @@ io::SkinnedImport load_skinned(const std::string& path, const animator::Limits& 
 }  // namespace
 
 std::size_t UploadCaps::largest() const { return std::max({urdf, json, bvh, gltf, fbx, dae, c3d}); }
+
+UploadCap upload_cap(const UploadCaps& caps, const std::string& ext) {
+  if (ext == ".urdf") return {caps.urdf, "pindrag serve --max-upload-urdf"};
+  if (ext == ".json") return {caps.json, "pindrag serve --max-upload-json"};
+  if (ext == ".bvh") return {caps.bvh, "pindrag serve --max-upload-bvh"};
+  if (ext == ".gltf" || ext == ".glb") return {caps.gltf, "pindrag serve --max-upload-gltf"};
+  if (ext == ".fbx") return {caps.fbx, "pindrag serve --max-upload-fbx"};
+  if (ext == ".c3d") return {caps.c3d, "pindrag serve --max-upload-c3d"};
+  return {caps.dae, "pindrag serve --max-upload-dae"};
+}
 
 std::string byte_text(std::size_t bytes) {
   constexpr std::size_t kMiB = std::size_t{1} << 20;

@@ -36,6 +36,13 @@ struct UploadCaps {
   std::size_t largest() const;
 };
 
+/// The cap of a file type (by its extension, ".gltf") and the setting that changes it.
+struct UploadCap {
+  std::size_t bytes;
+  const char* setting;
+};
+UploadCap upload_cap(const UploadCaps& caps, const std::string& ext);
+
 /// What an upload is held to: its size by type, and the session's budgets for what it brings.
 struct UploadRules {
   UploadCaps caps;

@@ -215,7 +215,9 @@ TEST_F(LimitsTest, AGltfOpensWithTheBufferFilesSentBesideIt) {
   res = upload("walk.bvh", bvh_text(20), {{"figure data.bin", bin}});
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 400);
-  EXPECT_NE(error_of(res).find("only a .gltf is sent with resource files"), std::string::npos)
+  EXPECT_NE(
+      error_of(res).find("only a .gltf, .glb, .fbx or .dae is sent with the files it references"),
+      std::string::npos)
       << error_of(res);
   EXPECT_EQ(server_->registry().size(), 0u);
   // with its buffer: created, the figure's skeleton and its two frames

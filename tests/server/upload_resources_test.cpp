@@ -84,9 +84,13 @@ TEST(UploadResources, NamesCountsAndSizesHaveRules) {
       resources_refusal(kTwoBuffers, {{"skin weights.bin", "1234"}}, caps);
   EXPECT_EQ(status, 413);
   EXPECT_NE(message.find("(set by pindrag serve --max-upload-gltf)"), std::string::npos) << message;
-  // only a .gltf brings resources
-  EXPECT_EQ(resources_refusal("", {{"a.bin", "x"}}, {}, ".glb").first, 400);
-  EXPECT_EQ(resources_refusal("", {}, {}, ".glb").first, 0);
+  // only a file that can reference others brings them; its stored name is its own
+  EXPECT_EQ(resources_refusal("", {{"a.bin", "x"}}, {}, ".bvh").first, 400);
+  EXPECT_EQ(resources_refusal("", {}, {}, ".bvh").first, 0);
+  EXPECT_EQ(resources_refusal("", {{"skin.png", "x"}}, {}, ".fbx").first, 0);
+  EXPECT_NE(resources_refusal("", {{"Upload.fbx", "x"}}, {}, ".fbx")
+                .second.find("not upload.fbx, the name the upload is stored under"),
+            std::string::npos);
 }
 
 }  // namespace
