@@ -6,13 +6,13 @@
 #include <random>
 
 namespace server {
-namespace {
-
 std::string lower(std::string_view s) {
   std::string out(s);
   for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
 }
+
+namespace {
 
 bool is_ip_literal(std::string_view name) {
   if (name.size() >= 2 && name.front() == '[' && name.back() == ']') return true;  // IPv6

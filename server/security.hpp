@@ -72,6 +72,9 @@ std::optional<std::filesystem::path> resolve_static_path(
     const std::vector<std::string>& forbidden_segments,
     std::string* why = nullptr);
 
+/// `s` with its ASCII letters in lower case (host names, header names, file extensions).
+std::string lower(std::string_view s);
+
 /// A name safe as a file name and in Content-Disposition: [A-Za-z0-9._-]{1,64}, other bytes
 /// become '_', no leading dot; `fallback` when nothing remains.
 std::string safe_file_name(std::string_view name, std::string_view fallback);

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 #include <nlohmann/json.hpp>
-#include <set>
 
 #include "server/security.hpp"
 #include "server/uploads.hpp"
@@ -18,12 +18,6 @@ bool plain_file_name(const std::string& name) {
   return std::none_of(name.begin(), name.end(), [](unsigned char c) {
     return c < 0x20 || c == 0x7f || c == '/' || c == '\\';
   });
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
 }
 
 // RFC 3986 percent-decoding of a relative URI ("my%20skin.bin" names "my skin.bin")
@@ -134,7 +128,7 @@ std::vector<StoredResource> check_upload_resources(const std::string& field,
                                shown + "\" (rule: at most " + std::to_string(kMaxUploadResources) +
                                ")");
   }
-  std::set<std::string> names;
+  std::map<std::string, const UploadResource*> by_name;
   std::size_t total = bytes.size();
   for (const UploadResource& r : resources) {
     const std::string name = safe_file_name(r.name, "?");
@@ -145,7 +139,7 @@ std::vector<StoredResource> check_upload_resources(const std::string& field,
                                  "upload" +
                                  ext + ", the name the upload is stored under)");
     }
-    if (!names.insert(r.name).second) {
+    if (!by_name.emplace(r.name, &r).second) {
       throw UploadError(400, "resource: \"" + name + "\" is sent twice");
     }
     total += r.bytes.size();
@@ -163,13 +157,10 @@ std::vector<StoredResource> check_upload_resources(const std::string& field,
   for (const BufferFile& buffer : referenced_buffer_files(bytes)) {
     const std::string& uri = buffer.uri;
     const std::string& file = buffer.name;
-    if (names.count(file)) {
+    if (const auto sent = by_name.find(file); sent != by_name.end()) {
       // assimp opens the URI's text as it stands: an encoded name is stored under it as well
-      if (uri != file && plain_file_name(uri) && !names.count(uri)) {
-        const auto r = std::find_if(resources.begin(), resources.end(),
-                                    [&](const UploadResource& x) { return x.name == file; });
-        stored.push_back({uri, &*r});
-        names.insert(uri);
+      if (uri != file && plain_file_name(uri) && by_name.emplace(uri, sent->second).second) {
+        stored.push_back({uri, sent->second});
       }
       continue;
     }

@@ -24,10 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string extension_of(const std::string& file_name) {
-  std::string ext = fs::path(file_name).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
+  return lower(fs::path(file_name).extension().string());
 }
 
 // A private folder holding one uploaded file (and the files it references); removed with

@@ -7,11 +7,10 @@
 // edits, saves and loads: which of the clip's joints drives which of the character's links), or
 // leave it.
 
-import { h, uploadTooLarge, GLTF_RESOURCES } from './panel_util.js';
+import { h, uploadTooLarge, GLTF_RESOURCES, hasExtension } from './panel_util.js';
 import { knownSessions, rememberSession } from './known_sessions.js';
 
 const ACCEPTED_CHARACTERS = '.urdf,.json,.bvh,.glb,.gltf,.fbx,.dae';
-const CHARACTER_FILE = /\.(urdf|json|bvh|glb|gltf|fbx|dae)$/i;
 const BVH_UNITS = [
   ['auto', 'guess from its height'],
   ['m', 'metres'],
@@ -73,7 +72,7 @@ export function createOpenDialog(state, api, switchSession) {
       input.value = '';
       if (!files.length) return;
       // one character file; the rest are the files a .gltf references (a "glTF Separate" export)
-      const file = files.find((f) => CHARACTER_FILE.test(f.name));
+      const file = files.find((f) => hasExtension(f.name, ACCEPTED_CHARACTERS));
       if (!file) {
         notify(`choose a character file (${ACCEPTED_CHARACTERS}); a .gltf's buffers and images go with it`, 'error');
         return;

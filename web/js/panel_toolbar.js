@@ -1,12 +1,11 @@
 // The top bar: the character, Open…, undo/redo, pin mode, gizmo mode, clip upload, export buttons
 // and the connection badge.
 
-import { h, uploadTooLarge, GLTF_RESOURCES } from './panel_util.js';
+import { h, uploadTooLarge, GLTF_RESOURCES, hasExtension } from './panel_util.js';
 import { PIN_MODES, EXPORT_FORMATS } from './protocol.js';
 
 // a marker trial (.c3d) is fitted onto the character by the server (docs/marker-fitting.md)
 const ACCEPTED_CLIPS = '.bvh,.glb,.gltf,.fbx,.dae,.c3d';
-const CLIP_FILE = /\.(bvh|glb|gltf|fbx|dae|c3d)$/i;
 
 function segmented(name, options, current, onPick) {
   const buttons = options.map(([value, label, title]) =>
@@ -54,7 +53,7 @@ export function createToolbar(state, api, connection, actions, openDialog) {
     fileInput.value = '';
     if (!files.length) return;
     // one clip file; the rest are the files a .gltf references (a "glTF Separate" export)
-    const file = files.find((f) => CLIP_FILE.test(f.name));
+    const file = files.find((f) => hasExtension(f.name, ACCEPTED_CLIPS));
     if (!file) {
       signals.notify.dispatch({ text: `choose a clip file (${ACCEPTED_CLIPS}); a .gltf's buffers and images go with it`, kind: 'error' });
       return;

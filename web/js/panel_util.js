@@ -38,6 +38,12 @@ export function fmt(x, digits = 1) {
  *  are sent as its "resource" files (the file pickers' `accept` lists them). */
 export const GLTF_RESOURCES = '.bin,.png,.jpg,.jpeg,.webp,.ktx2';
 
+/** Whether a file name ends in one of the extensions of an `accept` list ('.bvh,.glb'). */
+export function hasExtension(name, accept) {
+  const lower = name.toLowerCase();
+  return accept.split(',').some((ext) => lower.endsWith(ext));
+}
+
 /** Why `file` cannot be uploaded to this server (over its largest upload cap), or null. */
 export function uploadTooLarge(state, file) {
   const limit = state.config?.limits?.upload_bytes;
