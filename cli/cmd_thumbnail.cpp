@@ -45,7 +45,7 @@ Subject load_subject(const std::string& file) {
   } else if (ext == ".glb" || ext == ".gltf" || ext == ".fbx" || ext == ".dae") {
     io::SkinnedImport imported = io::import_skinned_file(file);
     s.model = imported.model;
-    s.skin = std::move(imported.mesh);
+    if (!imported.mesh.empty()) s.skin = std::move(imported.mesh);
     if (!imported.clips.empty()) s.clip = std::move(imported.clips.front().clip);
   } else {
     s.model = io::load_character(file).model;

@@ -17,6 +17,7 @@
 #include "io/assimp_animation.hpp"
 #include "io/assimp_mesh.hpp"
 #include "io/assimp_reply.hpp"
+#include "io/assimp_rigid.hpp"
 #include "io/assimp_scene.hpp"
 #include "io/assimp_skeleton.hpp"
 #include "io/sandbox.hpp"
@@ -96,6 +97,7 @@ SkinnedImport convert_scene(const aiScene& scene,
   const SceneNodes nodes = index_nodes(scene);
   const WorldAxes world = world_axes(scene, lower_extension(path), warnings);
   SkinnedMeshes skinned = collect_bones(scene, nodes, warnings);
+  if (skinned.offset.empty()) skinned = collect_moved_nodes(scene, nodes, warnings);
   Skeleton skeleton = choose_links(nodes, skinned, warnings);
   mesh_bind_spaces(nodes, skinned);
   bind_poses(nodes, skinned, world, skeleton, warnings);
@@ -108,8 +110,8 @@ SkinnedImport convert_scene(const aiScene& scene,
   const std::size_t nl = skeleton.links.size();
   std::vector<int> model_link(nl);  // model link index of each link
   for (std::size_t k = 0; k < nl; ++k) model_link[k] = out.model->link_index(skeleton.link_name[k]);
-  out.mesh =
-      build_mesh(scene, skinned, world, skeleton, model_link, image_reader_beside(path), warnings);
+  out.mesh = build_mesh(scene, nodes, skinned, world, skeleton, model_link,
+                        image_reader_beside(path), warnings);
   for (const AnimInfo& info : motion.anims)
     check_budget(info, options.budget, options.frame_rate, out.model->nq);
   out.clips = build_clips(*out.model, model_link, skeleton, motion, poses, options.frame_rate);

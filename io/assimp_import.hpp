@@ -12,7 +12,10 @@
 // every other link is on a spherical joint whose placement is its bind pose relative to its
 // parent, so the neutral configuration is the bind pose. The animated transforms of the nodes
 // above the root (an "Armature" node, axis conversions) are folded into the root's motion.
-// Masses come from bone lengths (a slender cylinder per bone), scaled to a total mass.
+// Masses come from bone lengths (a slender cylinder per bone), scaled to a total mass. A file
+// without skinned meshes whose animations move its nodes (a skeleton exported without its mesh,
+// a rigid mechanism) imports too: the moved nodes stand for the bones, in their rest pose, and
+// each mesh a node carries follows that node's link whole (io/assimp_rigid.hpp).
 //
 // World: metres, Y up. glTF is both already; FBX lengths are scaled by UnitScaleFactor / 100
 // (FBX units are centimetres times that factor) and its axes turned by the file's axis system.
@@ -84,8 +87,8 @@ struct SkinnedImport {
 /// its own folder; nothing outside that folder is opened.
 /// @throws ModelError naming the file and what went wrong: missing, empty, too large, not the
 ///         format its extension says, rejected by assimp (with assimp's message), no skinned
-///         mesh, the child crashed / ran out of memory or CPU time / timed out, or its reply was
-///         malformed
+///         mesh and no animation that moves a node, the child crashed / ran out of memory or CPU
+///         time / timed out, or its reply was malformed
 SkinnedImport import_skinned_file(const std::string& path,
                                   const ImportLimits& limits = {},
                                   const ImportOptions& options = {});

@@ -55,6 +55,20 @@ void append_vertices(const aiMesh& mesh, const Matrix4& M, SkinnedMesh& out) {
   }
 }
 
+// every vertex of a mesh a node carries: weight 1 on the link of that node, or of the nearest
+// node above it that is a link (the root is above every such node)
+void append_rigid_influences(const SourceMesh& sm,
+                             const SceneNodes& scene,
+                             const Skeleton& s,
+                             BoneTable& bones,
+                             SkinnedMesh& out) {
+  int node = sm.rigid_node;
+  while (s.link_of_node[node] < 0) node = scene.nodes[node].parent;
+  const int bone = bones.bone(s.link_of_node[node]);
+  out.joints.insert(out.joints.end(), sm.mesh->mNumVertices, {bone, 0, 0, 0});
+  out.weights.insert(out.weights.end(), sm.mesh->mNumVertices, {1.0f, 0.0f, 0.0f, 0.0f});
+}
+
 // joints and weights of one mesh's vertices: up to four influences, the largest kept and
 // normalized; a vertex without any follows the root. Returns how many had none.
 std::size_t append_influences(const SourceMesh& sm,
@@ -216,6 +230,7 @@ core::MeshPart mesh_part(const aiScene& scene,
 }  // namespace
 
 SkinnedMesh build_mesh(const aiScene& scene,
+                       const SceneNodes& scene_nodes,
                        const SkinnedMeshes& skinned,
                        const WorldAxes& world,
                        const Skeleton& skeleton,
@@ -235,7 +250,11 @@ SkinnedMesh build_mesh(const aiScene& scene,
     if (out.name.empty()) out.name = mesh->mName.C_Str();
     append_vertices(*mesh, world.A * sm.B, out);
     append_uvs(*mesh, out);
-    unweighted += append_influences(sm, skeleton, bones, out);
+    if (sm.rigid_node >= 0) {
+      append_rigid_influences(sm, scene_nodes, skeleton, bones, out);
+    } else {
+      unweighted += append_influences(sm, skeleton, bones, out);
+    }
     const std::size_t first_triangle = out.triangles.size();
     append_triangles(*mesh, base, out);
     out.parts.push_back(mesh_part(scene, *mesh, first_triangle, out, textures));

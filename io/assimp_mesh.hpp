@@ -1,7 +1,8 @@
 // The mesh stage of the skinned import (io/assimp_import.hpp), run in the child: the skinned
 // triangle meshes of the file merged into one core::SkinnedMesh in the bind pose, in our world
 // (metres, Y up). Up to four influences per vertex, the largest kept and renormalized; a vertex
-// without any follows the root. Each source mesh is a part with its material's base colour and
+// without any follows the root; a mesh a node carries (a file without skinned meshes) follows
+// that node's link whole. Each source mesh is a part with its material's base colour and
 // base-colour (else diffuse) texture, with its first set of texture coordinates. Internal to io/.
 #pragma once
 
@@ -23,6 +24,7 @@ using ImageFileReader = std::function<std::string(const std::string& name)>;
 /// Requires: mesh_bind_spaces and bind_poses on `skinned` and `skeleton`.
 /// @throws std::runtime_error for more than INT_MAX vertices
 SkinnedMesh build_mesh(const aiScene& scene,
+                       const SceneNodes& scene_nodes,
                        const SkinnedMeshes& skinned,
                        const WorldAxes& world,
                        const Skeleton& skeleton,

@@ -168,11 +168,6 @@ SkinnedMeshes collect_bones(const aiScene& scene, const SceneNodes& nodes, Warni
     }
     out.meshes.push_back(sm);
   }
-  if (out.offset.empty()) {
-    throw std::runtime_error(
-        "it has no skinned mesh (no mesh with bones), so there is no "
-        "skeleton to import");
-  }
   return out;
 }
 
@@ -186,6 +181,10 @@ Matrix4 offset_for(const SourceMesh& sm, int node) {
 void mesh_bind_spaces(const SceneNodes& scene, SkinnedMeshes& skinned) {
   const std::vector<Node>& nodes = scene.nodes;
   for (SourceMesh& sm : skinned.meshes) {
+    if (sm.rigid_node >= 0) {
+      sm.B = nodes[sm.rigid_node].global_rest;
+      continue;
+    }
     int top = -1;
     for (int node : sm.bone_node) {
       if (node >= 0 && (top < 0 || nodes[node].depth < nodes[top].depth)) top = node;

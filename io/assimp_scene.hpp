@@ -81,29 +81,40 @@ struct WorldAxes {
 /// @param ext  the file's extension, lower case (".fbx" reads the FBX metadata)
 WorldAxes world_axes(const aiScene& scene, const std::string& ext, Warnings& warnings);
 
-/// A skinned triangle mesh of the file.
+/// A triangle mesh of the file: skinned by its bones, or (a file without skinned meshes) carried
+/// whole by a node.
 struct SourceMesh {
   const aiMesh* mesh = nullptr;
-  std::vector<int> bone_node;       // node of each aiBone, or -1
+  std::vector<int> bone_node;  // node of each aiBone, or -1
+  // a mesh without bones: the node that carries it (its vertices are in that node's frame); it
+  // follows the link of that node, or of the nearest node above it that is a link
+  int rigid_node = -1;
   Matrix4 B = Matrix4::Identity();  // bind space → file world (set by mesh_bind_spaces)
 };
 
-/// The skinned triangle meshes and the offset matrix of every bone node.
+/// The meshes and what becomes a link: the skinned triangle meshes and the offset matrix of every
+/// bone node or, in a file without skinned meshes, the nodes its animations move and the meshes
+/// its nodes carry.
 struct SkinnedMeshes {
   std::vector<SourceMesh> meshes;
   std::map<int, Matrix4> offset;   // bone node → offset matrix (first mesh naming it)
   std::map<int, int> offset_mesh;  // bone node → that mesh
+  // without skinned meshes: the nodes an animation moves, each a link whose bind pose is its
+  // rest pose (io/assimp_rigid.hpp)
+  std::vector<int> moved_nodes;
 };
 
 /// Bones of every skinned triangle mesh; a bone without a node loses its weights (a warning).
-/// @throws std::runtime_error for a non-finite offset matrix, or when no mesh has bones
+/// Empty (no offset) when no mesh has bones with nodes.
+/// @throws std::runtime_error for a non-finite offset matrix
 SkinnedMeshes collect_bones(const aiScene& scene, const SceneNodes& nodes, Warnings& warnings);
 
 /// The offset matrix of `node` among the bones of `mesh`, or the identity.
 Matrix4 offset_for(const SourceMesh& mesh, int node);
 
 /// B of every mesh: the rest pose of its top bone times that bone's offset matrix, so that every
-/// bone's global transform times its offset matrix is B in the bind pose.
+/// bone's global transform times its offset matrix is B in the bind pose; for a mesh carried by
+/// a node, that node's rest pose.
 void mesh_bind_spaces(const SceneNodes& nodes, SkinnedMeshes& skinned);
 
 }  // namespace io::assimp_detail

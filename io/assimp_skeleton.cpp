@@ -12,11 +12,10 @@ namespace io::assimp_detail {
 
 namespace {
 
-// the deepest node above every bone: the lowest common ancestor of all bone nodes
-int common_root(const std::vector<Node>& nodes, const std::map<int, Matrix4>& offset) {
-  int root = offset.begin()->first;
-  for (const auto& [node, unused] : offset) {
-    (void)unused;
+// the deepest node above every node of `under` (not empty): their lowest common ancestor
+int common_root(const std::vector<Node>& nodes, const std::vector<int>& under) {
+  int root = under.front();
+  for (int node : under) {
     int a = root, b = node;
     while (nodes[a].depth > nodes[b].depth) a = nodes[a].parent;
     while (nodes[b].depth > nodes[a].depth) b = nodes[b].parent;
@@ -51,10 +50,20 @@ void name_links(const std::vector<Node>& nodes, Skeleton& s, Warnings& warnings)
 Skeleton choose_links(const SceneNodes& scene, const SkinnedMeshes& skinned, Warnings& warnings) {
   const std::vector<Node>& nodes = scene.nodes;
   Skeleton s;
-  s.root = common_root(nodes, skinned.offset);
-  std::vector<char> is_link(nodes.size(), 0);
+  // the bones, or the nodes the animations move; the root is also above every mesh a node carries
+  std::vector<int> bones = skinned.moved_nodes;
   for (const auto& [node, unused] : skinned.offset) {
     (void)unused;
+    bones.push_back(node);
+  }
+  if (bones.empty()) throw std::logic_error("choose_links: no bone and no moved node");
+  std::vector<int> under = bones;
+  for (const SourceMesh& sm : skinned.meshes) {
+    if (sm.rigid_node >= 0) under.push_back(sm.rigid_node);
+  }
+  s.root = common_root(nodes, under);
+  std::vector<char> is_link(nodes.size(), 0);
+  for (int node : bones) {
     for (int n = node; n != s.root && !is_link[n]; n = nodes[n].parent) is_link[n] = 1;
   }
   is_link[s.root] = 1;

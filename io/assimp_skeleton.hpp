@@ -1,6 +1,8 @@
 // The skeleton stage of the skinned import (io/assimp_import.hpp), run in the child: which nodes
 // become links, their bind pose, and the core::Model built from them. The root is the deepest
-// node above every bone; the links are the nodes on the paths from it to the bones. The root
+// node above every bone; the links are the nodes on the paths from it to the bones. In a file
+// without skinned meshes the nodes its animations move stand for the bones (their bind pose is
+// their rest pose), and the root is also above every node that carries a mesh. The root
 // gets a free joint placed at its bind pose in the world, every other link a spherical joint (or
 // a free one when a clip moves it, see assimp_animation.hpp) placed at its bind pose relative
 // to its parent, so the neutral configuration is the bind pose. Internal to io/.

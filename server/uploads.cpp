@@ -170,7 +170,10 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
     io::SkinnedImport imported = load_skinned(path, limits);
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
-    session->set_skin(std::make_shared<const core::SkinnedMesh>(std::move(imported.mesh)));
+    // an animation-only file (a skeleton without its mesh) is drawn as capsules
+    if (!imported.mesh.empty()) {
+      session->set_skin(std::make_shared<const core::SkinnedMesh>(std::move(imported.mesh)));
+    }
     if (!imported.clips.empty() && imported.clips.front().clip.size() > 1) {
       session->set_clip(std::move(imported.clips.front().clip), "import clip");
     }

@@ -627,16 +627,15 @@ void expect_import_error_with(const std::string& path,
   }
 }
 
-// our export read back through assimp: human48 with a skinned mesh and a clip
-TEST(AssimpImport, OurOwnExportRoundTrips) {
-  const auto m = core::build_human_figure({});
+// 90 frames of every joint of `m` moving (the root turning and walking), at 30 frames/s
+core::Clip moving_clip(const core::Model& m) {
   core::Clip clip;
   for (int k = 0; k < 90; ++k) {
-    Eigen::VectorXd q = core::neutral_configuration(*m);
+    Eigen::VectorXd q = core::neutral_configuration(m);
     const double t = k / 30.0;
-    for (int i = 1; i < m->njoints; ++i) {
-      const int iq = m->idx_q[i];
-      switch (m->joint_type[i]) {
+    for (int i = 1; i < m.njoints; ++i) {
+      const int iq = m.idx_q[i];
+      switch (m.joint_type[i]) {
         case core::JointType::kRevolute:
           q[iq] = 0.8 * std::sin(t + i);
           break;
@@ -655,34 +654,172 @@ TEST(AssimpImport, OurOwnExportRoundTrips) {
     }
     clip.frames.push_back(q);
   }
+  return clip;
+}
+
+// The largest difference between the world poses of m's links along `clip` and those of the
+// links of the same names along the import's first clip (rotation entries, metres); every link
+// of m must be in the import.
+double worst_link_pose_error(const core::Model& m,
+                             const core::Clip& clip,
+                             const io::SkinnedImport& s) {
+  const core::Model& im = *s.model;
+  EXPECT_EQ(s.clips.size(), 1u);
+  EXPECT_EQ(s.clips.at(0).clip.size(), clip.size());
+  EXPECT_EQ(s.clips.at(0).start_time, 0.0);
+  core::Data a(m), b(im);
+  double worst = 0;
+  for (int k = 0; k < clip.size() && k < s.clips.at(0).clip.size(); ++k) {
+    core::forward_kinematics(m, a, clip.frames[k]);
+    core::forward_kinematics(im, b, s.clips[0].clip.frames[k]);
+    for (int i = 1; i < m.njoints; ++i) {
+      const int j = im.link_index(m.link_name[i]);
+      if (j <= 0) {
+        ADD_FAILURE() << m.link_name[i] << " is not a link of the import";
+        return INFINITY;
+      }
+      worst = std::max({worst, (a.X_W[i].R - b.X_W[j].R).cwiseAbs().maxCoeff(),
+                        (a.X_W[i].p - b.X_W[j].p).norm()});
+    }
+  }
+  return worst;
+}
+
+// our export read back through assimp: human48 with a skinned mesh and a clip
+TEST(AssimpImport, OurOwnExportRoundTrips) {
+  const auto m = core::build_human_figure({});
+  const core::Clip clip = moving_clip(*m);
   gltf_test::TempDir dir;
   io::GltfExportOptions o;
   o.stick_figure = true;  // every link is a bone of the stick figure
   const std::string path = dir.path("human48.glb");
   io::save_gltf_file(path, *m, &clip, nullptr, o);
   const io::SkinnedImport s = io::import_skinned_file(path);
-  const core::Model& im = *s.model;
-  EXPECT_EQ(im.nlinks(), m->nlinks());
-  ASSERT_EQ(s.clips.size(), 1u);
-  ASSERT_EQ(s.clips[0].clip.size(), clip.size());
-  EXPECT_EQ(s.clips[0].start_time, 0.0);
-  core::Data a(*m), b(im);
-  double worst = 0;
-  for (int k = 0; k < clip.size(); ++k) {
-    core::forward_kinematics(*m, a, clip.frames[k]);
-    core::forward_kinematics(im, b, s.clips[0].clip.frames[k]);
-    for (int i = 1; i < m->njoints; ++i) {
-      const int j = im.link_index(m->link_name[i]);
-      ASSERT_GT(j, 0) << m->link_name[i];
-      worst = std::max({worst, (a.X_W[i].R - b.X_W[j].R).cwiseAbs().maxCoeff(),
-                        (a.X_W[i].p - b.X_W[j].p).norm()});
-    }
-  }
+  EXPECT_EQ(s.model->nlinks(), m->nlinks());
+  const double worst = worst_link_pose_error(*m, clip, s);
   std::printf(
       "  human48 -> glb -> assimp -> import: link world poses vs the original, max error %.3g\n",
       worst);
   EXPECT_LE(worst, 1e-5);
   for (double d : s.dropped_offset) EXPECT_LE(d, 1e-6);
+  expect_no_children();
+}
+
+// An animation without its mesh (a skeleton exported alone, as "without skin" downloads come):
+// no mesh has bones, so the nodes the animation moves are the skeleton, in their rest pose.
+TEST(AssimpImport, AnAnimationWithoutItsMeshImportsAsTheSkeletonItMoves) {
+  const auto m = core::build_human_figure({});
+  const core::Clip clip = moving_clip(*m);
+  gltf_test::TempDir dir;
+  const std::string path = dir.path("walk.glb");
+  io::save_gltf_file(path, *m, &clip, nullptr, {});  // no mesh: only the nodes and their keys
+  const io::SkinnedImport s = io::import_skinned_file(path);
+  EXPECT_EQ(s.model->nlinks(), m->nlinks());
+  EXPECT_TRUE(s.mesh.empty());
+  const double worst = worst_link_pose_error(*m, clip, s);
+  std::printf("  human48 nodes and keys alone -> glb -> import: link world poses, max error %.3g\n",
+              worst);
+  EXPECT_LE(worst, 1e-5);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_EQ(s.warnings.front(),
+            "walk.glb: no mesh has bones: the " + std::to_string(m->nlinks()) +
+                " nodes its animations move are imported as links (it has no mesh)");
+  // without the animation there is nothing to tell the skeleton by
+  io::save_gltf_file(dir.path("still.glb"), *m, nullptr, nullptr, {});
+  try {
+    io::import_skinned_file(dir.path("still.glb"));
+    ADD_FAILURE() << "a skeleton without a mesh or an animation imported";
+  } catch (const core::ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("no skinned mesh (no mesh with bones) and no animation "
+                                         "that moves its nodes"),
+              std::string::npos)
+        << e.what();
+  }
+  expect_no_children();
+}
+
+// A rigid mechanism: an arm that turns on a base, a part fixed to the arm through a node that
+// does not move. Each mesh goes with the link of its node, or of the nearest link above it.
+TEST(AssimpImport, MeshesOfARigidMechanismFollowTheirNodesWhole) {
+  gltf_test::TempDir dir;
+  // one triangle (3 float positions), its indices (3 shorts, padded to 8 bytes), key times 0 and
+  // 1 s, and the arm's rotations at them: none, then a quarter turn about z
+  const float positions[9] = {0, 0, 0, 0.1f, 0, 0, 0, 0.1f, 0};
+  const std::uint16_t indices[4] = {0, 1, 2, 0};
+  const float times[2] = {0, 1};
+  const float h = static_cast<float>(std::sqrt(0.5));
+  const float rotations[8] = {0, 0, 0, 1, 0, 0, h, h};
+  std::string bin;
+  for (const auto& [data, size] : {std::pair<const void*, std::size_t>{positions, sizeof positions},
+                                   {indices, sizeof indices},
+                                   {times, sizeof times},
+                                   {rotations, sizeof rotations}}) {
+    bin.append(static_cast<const char*>(data), size);
+  }
+  gltf_test::write_bytes(dir.path("arm.bin"), bin);
+  const Json gltf = Json::parse(R"({
+    "asset": {"version": "2.0"},
+    "scene": 0, "scenes": [{"nodes": [0]}],
+    "nodes": [
+      {"name": "base", "mesh": 0, "children": [1]},
+      {"name": "arm", "mesh": 0, "translation": [0, 1, 0], "children": [2]},
+      {"name": "bracket", "mesh": 0, "translation": [0.5, 0, 0]}
+    ],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+    "buffers": [{"uri": "arm.bin", "byteLength": 84}],
+    "bufferViews": [
+      {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+      {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+      {"buffer": 0, "byteOffset": 44, "byteLength": 8},
+      {"buffer": 0, "byteOffset": 52, "byteLength": 32}
+    ],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+       "min": [0, 0, 0], "max": [0.1, 0.1, 0]},
+      {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+      {"bufferView": 2, "componentType": 5126, "count": 2, "type": "SCALAR",
+       "min": [0], "max": [1]},
+      {"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC4"}
+    ],
+    "animations": [{"name": "turn",
+      "samplers": [{"input": 2, "output": 3, "interpolation": "LINEAR"}],
+      "channels": [{"sampler": 0, "target": {"node": 1, "path": "rotation"}}]}]
+  })");
+  gltf_test::write_bytes(dir.path("arm.gltf"), gltf.dump());
+  const io::SkinnedImport s = io::import_skinned_file(dir.path("arm.gltf"));
+  const core::Model& m = *s.model;
+  ASSERT_EQ(m.nlinks(), 2);  // the base (the root, above every mesh) and the arm
+  EXPECT_EQ(m.link_name[1], "base");
+  EXPECT_EQ(m.link_name[2], "arm");
+  ASSERT_EQ(s.mesh.positions.size(), 9u);
+  ASSERT_EQ(s.mesh.parts.size(), 3u);
+  ASSERT_EQ(s.clips.size(), 1u);
+  const core::Clip& clip = s.clips[0].clip;
+  ASSERT_EQ(clip.size(), 31);  // 1 s at 30 frames/s
+  // where the skin puts each vertex at the first and the last frame, against the file's nodes:
+  // the base's triangle stays, the arm's and the bracket's turn a quarter about the arm's origin
+  const auto skinned = [&](const Eigen::VectorXd& q, int v) {
+    core::Data data(m);
+    core::forward_kinematics(m, data, q);
+    Vector3 p = Vector3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      const int bone = s.mesh.joints[v][k];
+      p +=
+          s.mesh.weights[v][k] * (data.X_W[s.mesh.bones[bone]] *
+                                  (s.mesh.inverse_bind[bone] * s.mesh.positions[v].cast<double>()));
+    }
+    return p;
+  };
+  const Eigen::Matrix3d quarter = Eigen::AngleAxisd(M_PI / 2, Vector3::UnitZ()).toRotationMatrix();
+  const Vector3 arm_origin(0, 1, 0);
+  for (int v = 0; v < 9; ++v) {
+    const Vector3 local(positions[3 * (v % 3)], positions[3 * (v % 3) + 1], 0);
+    const Vector3 offset = v < 6 ? Vector3::Zero() : Vector3(0.5, 0, 0);  // the bracket's
+    const Vector3 rest = v < 3 ? local : Vector3(arm_origin + offset + local);
+    const Vector3 turned = v < 3 ? local : Vector3(arm_origin + quarter * (offset + local));
+    EXPECT_LE((skinned(clip.frames.front(), v) - rest).norm(), 1e-6) << "vertex " << v;
+    EXPECT_LE((skinned(clip.frames.back(), v) - turned).norm(), 1e-6) << "vertex " << v;
+  }
   expect_no_children();
 }
 

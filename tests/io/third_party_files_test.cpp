@@ -141,4 +141,46 @@ TEST(ThirdPartyFiles, EveryClipOrCharacterFileOfAssimpsTestModelsImportsOrIsRefu
   EXPECT_GE(skinned_imported, 1);
 }
 
+// 64 boxes in a chain, each turned by a node animation and none skinned: the nodes the
+// animation moves are the links, and each box, carried by a static node below its animated one,
+// moves with that link
+TEST(ThirdPartyFiles, AChainOfBoxesAnimatedWithoutBonesImportsAsTheNodesItMoves) {
+  const std::string dir = third_party_models_dir();
+  const std::string file = dir + "/Collada/anims_with_full_rotations_between_keys.DAE";
+  if (dir.empty() || !fs::exists(file)) {
+    GTEST_SKIP() << "assimp's test models not found (scripts/deps installs assimp-testmodels); "
+                    "skipping";
+  }
+  const io::SkinnedImport imported = io::import_skinned_file(file);
+  const core::Model& model = *imported.model;
+  ASSERT_EQ(model.nlinks(), 64);
+  EXPECT_EQ(model.link_name[1], "Box001");
+  EXPECT_EQ(model.link_name[64], "Box064");
+  // a box per link, each vertex on its link alone
+  ASSERT_EQ(imported.mesh.parts.size(), 64u);
+  EXPECT_EQ(imported.mesh.bones.size(), 64u);
+  for (const auto& w : imported.mesh.weights) EXPECT_EQ(w[0], 1.0f);
+  expect_valid_mesh(model, imported.mesh, file);
+  // each box where its pivot node puts it: 64 boxes 1.89 m apart, a tower 120 m tall
+  Eigen::Vector3f low = imported.mesh.positions.front(), high = low;
+  for (const auto& p : imported.mesh.positions) {
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  }
+  EXPECT_NEAR((high - low).maxCoeff(), 120.18, 0.01);
+  // the clip turns the boxes, the last one with every box below it
+  ASSERT_EQ(imported.clips.size(), 1u);
+  const core::Clip& clip = imported.clips[0].clip;
+  ASSERT_GT(clip.size(), 10);
+  core::Data first(model), later(model);
+  core::forward_kinematics(model, first, clip.frames.front());
+  double turned = 0;
+  for (const Eigen::VectorXd& q : clip.frames) {
+    core::forward_kinematics(model, later, q);
+    turned =
+        std::max(turned, Eigen::AngleAxisd(first.X_W[64].R.transpose() * later.X_W[64].R).angle());
+  }
+  EXPECT_GT(turned, 1.0);
+}
+
 }  // namespace

@@ -7,6 +7,9 @@
 #include <map>
 #include <thread>
 
+#include "core/configuration.hpp"
+#include "core/human_figure.hpp"
+#include "io/gltf.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/server/actor_hold.hpp"
 #include "tests/server/server_fixture.hpp"
@@ -637,6 +640,41 @@ TEST_F(ServerTest, RetargetingShowsItsGuessAndTakesTheUsersMapping) {
   const std::string syntax = json::parse(broken->body).at("error");
   EXPECT_EQ(syntax.rfind("mapping: line 1", 0), 0u) << syntax;
   EXPECT_EQ(snapshot(s).at("links"), edited.at("links")) << "a refused mapping changed the clip";
+}
+
+// An animation saved without its mesh (a skeleton and its keys, as "without skin" downloads
+// come) opens from the page as a character drawn with capsules, and loads as a clip onto another
+// character through retargeting
+TEST_F(ServerTest, AnAnimationWithoutItsMeshOpensAsACharacterAndRetargetsAsAClip) {
+  const auto m = core::build_human_figure({});
+  core::Clip clip;
+  for (int k = 0; k < 10; ++k) clip.frames.push_back(core::random_configuration(*m, 100 + k));
+  const std::vector<std::uint8_t> glb = io::write_glb(*m, &clip, nullptr, {});
+  const std::string bytes(glb.begin(), glb.end());
+  auto c = http();
+  const auto opened = c.Post(
+      "/api/sessions", {{"Origin", origin()}},
+      httplib::MultipartFormDataItems{{"character", bytes, "walk.glb", "model/gltf-binary"}});
+  ASSERT_TRUE(opened);
+  ASSERT_EQ(opened->status, 201) << opened->body;
+  const json created = json::parse(opened->body);
+  const Created s{created.at("id"), created.at("token")};
+  const json snap = snapshot(s);
+  EXPECT_EQ(snap.at("character").at("skinned"), false);
+  EXPECT_EQ(snap.at("character").at("links").size(), static_cast<std::size_t>(m->nlinks()));
+  EXPECT_EQ(snap.at("clip").at("frames"), 10);
+  const auto mesh = c.Get("/api/sessions/" + s.id + "/mesh", {{"X-Session-Token", s.token}});
+  ASSERT_TRUE(mesh);
+  EXPECT_EQ(mesh->status, 404);
+  // as a clip of the human figure: its joints are other joints (spherical), so it is retargeted
+  const Created human = create_session("human48");
+  const auto loaded =
+      c.Post("/api/sessions/" + human.id + "/clip?retarget=1",
+             {{"X-Session-Token", human.token}, {"Origin", origin()}},
+             httplib::MultipartFormDataItems{{"clip", bytes, "walk.glb", "model/gltf-binary"}});
+  ASSERT_TRUE(loaded);
+  ASSERT_EQ(loaded->status, 200) << loaded->body;
+  EXPECT_EQ(snapshot(human).at("clip").at("frames"), 10);
 }
 
 TEST_F(ServerTest, OversizeMessageClosesWith1009) {
