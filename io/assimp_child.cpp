@@ -99,8 +99,10 @@ SkinnedImport convert_scene(const aiScene& scene,
   SkinnedMeshes skinned = collect_bones(scene, nodes, warnings);
   if (skinned.offset.empty()) skinned = collect_moved_nodes(scene, nodes, warnings);
   Skeleton skeleton = choose_links(nodes, skinned, warnings);
+  if (skinned.moved_nodes.empty()) add_carried_meshes(scene, nodes, skeleton, skinned, warnings);
   mesh_bind_spaces(nodes, skinned);
   bind_poses(nodes, skinned, world, skeleton, warnings);
+  place_carried_meshes(nodes, skeleton, skinned);
   LinkPoses poses(nodes, skeleton, world);
   const Motion motion = sample_motion(scene, nodes, skeleton, poses, options, warnings);
 

@@ -15,7 +15,8 @@
 // Masses come from bone lengths (a slender cylinder per bone), scaled to a total mass. A file
 // without skinned meshes whose animations move its nodes (a skeleton exported without its mesh,
 // a rigid mechanism) imports too: the moved nodes stand for the bones, in their rest pose, and
-// each mesh a node carries follows that node's link whole (io/assimp_rigid.hpp).
+// each mesh a node carries follows that node's link whole (io/assimp_rigid.hpp). In a skinned
+// file, a mesh without bones carried by a node of the skeleton follows its link the same way.
 //
 // World: metres, Y up. glTF is both already; FBX lengths are scaled by UnitScaleFactor / 100
 // (FBX units are centimetres times that factor) and its axes turned by the file's axis system.

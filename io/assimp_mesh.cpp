@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "io/assimp_rigid.hpp"
+
 namespace io::assimp_detail {
 
 namespace {
@@ -56,15 +58,13 @@ void append_vertices(const aiMesh& mesh, const Matrix4& M, SkinnedMesh& out) {
 }
 
 // every vertex of a mesh a node carries: weight 1 on the link of that node, or of the nearest
-// node above it that is a link (the root is above every such node)
+// node above it that is a link
 void append_rigid_influences(const SourceMesh& sm,
                              const SceneNodes& scene,
                              const Skeleton& s,
                              BoneTable& bones,
                              SkinnedMesh& out) {
-  int node = sm.rigid_node;
-  while (s.link_of_node[node] < 0) node = scene.nodes[node].parent;
-  const int bone = bones.bone(s.link_of_node[node]);
+  const int bone = bones.bone(carrying_link(sm, scene, s));
   out.joints.insert(out.joints.end(), sm.mesh->mNumVertices, {bone, 0, 0, 0});
   out.weights.insert(out.weights.end(), sm.mesh->mNumVertices, {1.0f, 0.0f, 0.0f, 0.0f});
 }

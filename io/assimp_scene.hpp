@@ -113,8 +113,8 @@ SkinnedMeshes collect_bones(const aiScene& scene, const SceneNodes& nodes, Warni
 Matrix4 offset_for(const SourceMesh& mesh, int node);
 
 /// B of every mesh: the rest pose of its top bone times that bone's offset matrix, so that every
-/// bone's global transform times its offset matrix is B in the bind pose; for a mesh carried by
-/// a node, that node's rest pose.
+/// bone's global transform times its offset matrix is B in the bind pose (a mesh carried by a
+/// node: place_carried_meshes, io/assimp_rigid.hpp).
 void mesh_bind_spaces(const SceneNodes& nodes, SkinnedMeshes& skinned);
 
 }  // namespace io::assimp_detail

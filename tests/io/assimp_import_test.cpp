@@ -823,6 +823,99 @@ TEST(AssimpImport, MeshesOfARigidMechanismFollowTheirNodesWhole) {
   expect_no_children();
 }
 
+// A skinned figure with two meshes that have no bones: a prop under the right hand's node, which
+// follows the hand whole, and a plate beside the skeleton, which is left out with a warning.
+TEST(AssimpImport, AMeshWithoutBonesUnderABoneFollowsItAndOneBesideTheSkeletonIsLeftOut) {
+  const auto m = core::build_human_figure({});
+  const core::Clip clip = moving_clip(*m);
+  io::GltfExportOptions stick;
+  stick.stick_figure = true;
+  std::vector<std::string> errors;
+  gltf_test::Document doc =
+      gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr, stick), errors);
+  ASSERT_TRUE(errors.empty()) << errors.front();
+  // one triangle appended to the buffer: its positions, then its indices
+  const float positions[9] = {0, 0, 0, 0.2f, 0, 0, 0, 0, 0.2f};
+  const std::uint16_t indices[4] = {0, 1, 2, 0};
+  while (doc.bin.size() % 4 != 0) doc.bin.push_back(0);
+  const std::size_t at = doc.bin.size();
+  const auto* p = reinterpret_cast<const std::uint8_t*>(positions);
+  doc.bin.insert(doc.bin.end(), p, p + sizeof positions);
+  const auto* i = reinterpret_cast<const std::uint8_t*>(indices);
+  doc.bin.insert(doc.bin.end(), i, i + sizeof indices);
+  Json& j = doc.json;
+  const int views = static_cast<int>(j["bufferViews"].size());
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at}, {"byteLength", 36}});
+  j["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at + 36}, {"byteLength", 6}});
+  const int accessors = static_cast<int>(j["accessors"].size());
+  j["accessors"].push_back({{"bufferView", views},
+                            {"componentType", 5126},
+                            {"count", 3},
+                            {"type", "VEC3"},
+                            {"min", {0, 0, 0}},
+                            {"max", {0.2, 0, 0.2}}});
+  j["accessors"].push_back(
+      {{"bufferView", views + 1}, {"componentType", 5123}, {"count", 3}, {"type", "SCALAR"}});
+  const int mesh = static_cast<int>(j["meshes"].size());
+  j["meshes"].push_back(
+      {{"primitives", {{{"attributes", {{"POSITION", accessors}}}, {"indices", accessors + 1}}}}});
+  int hand = -1;
+  for (std::size_t n = 0; n < j["nodes"].size(); ++n) {
+    if (j["nodes"][n].value("name", "") == "r_hand") hand = static_cast<int>(n);
+  }
+  ASSERT_GE(hand, 0);
+  const Vector3 grip(0.05, -0.1, 0);  // the prop's node below the hand's
+  const int nodes = static_cast<int>(j["nodes"].size());
+  j["nodes"].push_back({{"name", "sword"}, {"mesh", mesh}, {"translation", {0.05, -0.1, 0}}});
+  j["nodes"][hand]["children"].push_back(nodes);
+  // the hand's rest rotation away from its bind pose (the clip animates it, the skin's inverse
+  // bind matrix keeps the bind pose): the prop must sit on the hand as it does at rest
+  j["nodes"][hand]["rotation"] = {0.3, 0.1, 0, std::sqrt(1 - 0.09 - 0.01)};
+  j["nodes"].push_back({{"name", "plate"}, {"mesh", mesh}});
+  j["scenes"][0]["nodes"].push_back(nodes + 1);
+  j["buffers"][0] = {{"uri", "figure.bin"}, {"byteLength", doc.bin.size()}};
+  gltf_test::TempDir dir;
+  gltf_test::write_bytes(dir.path("figure.bin"), std::string(doc.bin.begin(), doc.bin.end()));
+  gltf_test::write_bytes(dir.path("figure.gltf"), j.dump());
+
+  const io::SkinnedImport s = io::import_skinned_file(dir.path("figure.gltf"));
+  EXPECT_EQ(s.model->nlinks(), m->nlinks());  // the prop's node is not a link
+  const auto warned = [&](const std::string& text) {
+    return std::find(s.warnings.begin(), s.warnings.end(), text) != s.warnings.end();
+  };
+  EXPECT_TRUE(
+      warned("figure.gltf: mesh 'meshes[1]' has no bones and its node 'plate' is not on the "
+             "skeleton: it is left "
+             "out"));
+  EXPECT_TRUE(warned(
+      "figure.gltf: 1 mesh without bones moves rigidly with the link of the node that carries "
+      "it"));
+  // the prop is the last part: its three vertices, each on the hand alone, where the hand
+  // carries them in every frame
+  ASSERT_EQ(s.clips.size(), 1u);
+  const int first = static_cast<int>(s.mesh.positions.size()) - 3;
+  const int hand_link = s.model->link_index("r_hand");
+  core::Data source(*m), imported(*s.model);
+  double worst = 0;
+  for (int k = 0; k < clip.size(); ++k) {
+    core::forward_kinematics(*m, source, clip.frames[k]);
+    core::forward_kinematics(*s.model, imported, s.clips[0].clip.frames[k]);
+    for (int v = 0; v < 3; ++v) {
+      const int bone = s.mesh.joints[first + v][0];
+      ASSERT_EQ(s.mesh.bones[bone], hand_link);
+      ASSERT_EQ(s.mesh.weights[first + v][0], 1.0f);
+      const Vector3 skinned =
+          imported.X_W[hand_link] *
+          (s.mesh.inverse_bind[bone] * s.mesh.positions[first + v].cast<double>());
+      const Vector3 local(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+      const Vector3 expected = source.X_W[m->link_index("r_hand")] * Vector3(grip + local);
+      worst = std::max(worst, (skinned - expected).norm());
+    }
+  }
+  EXPECT_LE(worst, 1e-5);
+  expect_no_children();
+}
+
 // The file: a few kilobytes of glTF with a key at 33,000 s resampled into 990,001
 // frames. A clip budget refuses it from the key span, before resampling, naming the limit.
 TEST(AssimpImport, AnimationsBeyondTheClipBudgetAreRefusedBeforeResampling) {
