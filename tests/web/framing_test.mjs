@@ -109,3 +109,70 @@ test('a 60 m figure, a 6 cm figure and the bundled human are framed when they op
     await context.close();
   }
 });
+
+// A crane as a rigid mechanism without bones: a base and a 30 m boom that turns, each a mesh its
+// node carries. Its links are a metre apart; its mesh reaches 30 m beyond them.
+function craneGltf() {
+  const floats = (a) => Buffer.from(new Float32Array(a).buffer);
+  const bin = Buffer.concat([
+    floats([-0.5, 0, -0.5, 0.5, 0, -0.5, 0, 0, 0.5]), // base triangle: 36 bytes
+    floats([0, 0, -0.2, 30, 0, 0, 0, 0, 0.2]), // boom triangle: 36 bytes
+    Buffer.from(new Uint16Array([0, 1, 2, 0]).buffer), // indices (padded): 8 bytes
+    floats([0, 1]), // key times: 8 bytes
+    floats([0, 0, 0, 1, 0, 0, Math.sin(Math.PI / 12), Math.cos(Math.PI / 12)]), // 30° about z: 32 bytes
+  ]);
+  const view = (byteOffset, byteLength) => ({ buffer: 0, byteOffset, byteLength });
+  return JSON.stringify({
+    asset: { version: '2.0' },
+    scene: 0,
+    scenes: [{ nodes: [0] }],
+    nodes: [
+      { name: 'base', mesh: 0, children: [1] },
+      { name: 'boom', mesh: 1, translation: [0, 1, 0] },
+    ],
+    meshes: [0, 1].map((k) => ({ primitives: [{ attributes: { POSITION: k }, indices: 2 }] })),
+    buffers: [{ byteLength: bin.length, uri: `data:application/octet-stream;base64,${bin.toString('base64')}` }],
+    bufferViews: [view(0, 36), view(36, 36), view(72, 6), view(80, 8), view(88, 32)],
+    accessors: [
+      { bufferView: 0, componentType: 5126, count: 3, type: 'VEC3', min: [-0.5, 0, -0.5], max: [0.5, 0, 0.5] },
+      { bufferView: 1, componentType: 5126, count: 3, type: 'VEC3', min: [0, 0, -0.2], max: [30, 0, 0.2] },
+      { bufferView: 2, componentType: 5123, count: 3, type: 'SCALAR' },
+      { bufferView: 3, componentType: 5126, count: 2, type: 'SCALAR', min: [0], max: [1] },
+      { bufferView: 4, componentType: 5126, count: 2, type: 'VEC4' },
+    ],
+    animations: [{ samplers: [{ input: 3, output: 4 }], channels: [{ sampler: 0, target: { node: 1, path: 'rotation' } }] }],
+  });
+}
+
+/** How many of the skinned mesh's vertices are on the canvas. */
+async function meshVerticesOnScreen(page) {
+  return page.evaluate(() => {
+    const canvas = document.querySelector('canvas').getBoundingClientRect();
+    const { vertices } = window.pindrag.mesh();
+    let inside = 0;
+    for (let v = 0; v < vertices; v++) {
+      const p = window.pindrag.projectPoint(window.pindrag.skinnedVertex(v));
+      if (p.visible && p.x >= canvas.left && p.x <= canvas.right && p.y >= canvas.top && p.y <= canvas.bottom) inside++;
+    }
+    return { inside, total: vertices };
+  });
+}
+
+test('a mechanism whose mesh reaches far beyond its links is framed with its mesh, when it opens and by Home view', async () => {
+  const { page, context, problems } = await openOnUpload('crane.gltf', craneGltf());
+  await page.waitForFunction(() => window.pindrag.mesh() !== null, null, { timeout: 10000 });
+  await page.waitForTimeout(300);
+  for (const when of ['when opened', 'after Home view']) {
+    const seen = await meshVerticesOnScreen(page);
+    console.log(`the crane ${when}: ${seen.inside} of ${seen.total} mesh vertices on screen`);
+    assert.equal(seen.total, 6);
+    assert.equal(seen.inside, seen.total, `the crane ${when}: only ${seen.inside} of ${seen.total} mesh vertices are on screen`);
+    await checkFramed(page, `the crane ${when}`);
+    for (let k = 0; k < 15; k++) await page.mouse.wheel(0, -400); // zoom in on it
+    await page.click('#view-options button:has-text("Home view")');
+    await page.waitForTimeout(200);
+  }
+  await page.screenshot({ path: path.join(out, 'crane.png') });
+  assert.deepEqual(problems, []);
+  await context.close();
+});

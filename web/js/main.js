@@ -102,7 +102,7 @@ async function main() {
   const skinned = createSkinnedView(state, viewport, skeleton, api);
   const markers = createMarkersView(state, viewport, skeleton, api);
   createCameraFollow(state, viewport, skeleton);
-  frameEachNewCharacter(state, viewport, skeleton);
+  frameEachNewCharacter(state, viewport, skeleton, skinned);
   createPhysicsView(state, viewport, document.getElementById('stage'));
 
   const openDialog = createOpenDialog(state, api, switchSession);
@@ -236,15 +236,19 @@ async function main() {
   };
 }
 
-/** Home view frames the figure; a newly loaded character is framed once its first pose is drawn. */
-function frameEachNewCharacter(state, viewport, skeleton) {
-  viewport.subjectBounds = () => skeleton.bounds();
+/** Home view frames the figure and its mesh; a newly loaded character is framed once its first
+ *  pose is drawn, and again when its mesh arrives. */
+function frameEachNewCharacter(state, viewport, skeleton, skinned) {
+  viewport.subjectBounds = () => skinned.expandBounds(skeleton.bounds());
   let pending = false;
   state.signals.characterLoaded.add(() => (pending = true));
   state.signals.poseChanged.add(() => {
     if (!pending) return;
     pending = false;
     viewport.home();
+  });
+  state.signals.meshLoaded.add(() => {
+    if (!pending) viewport.home();
   });
 }
 

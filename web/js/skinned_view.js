@@ -170,6 +170,7 @@ export function createSkinnedView(state, viewport, skeleton, api) {
       clear();
       build(decoded, materials);
       state.meshVertices = decoded.header.vertices;
+      signals.meshLoaded.dispatch();
     } catch (err) {
       signals.notify.dispatch({ text: `${err.message}: the character is drawn as capsules`, kind: 'error' });
     }
@@ -190,5 +191,11 @@ export function createSkinnedView(state, viewport, skeleton, api) {
   return {
     /** The SkinnedMesh drawn now, or null. */
     object: () => (mesh ? mesh.object : null),
+    /** Grows a box (THREE.Box3) by the mesh as posed now, when it is shown: a mesh may reach far
+     *  beyond the links' capsules (a rigid part carried by a link). */
+    expandBounds(box) {
+      if (mesh && mesh.object.visible) box.expandByObject(mesh.object, true);
+      return box;
+    },
   };
 }

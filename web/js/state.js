@@ -30,6 +30,7 @@ export class Signal {
 export const SIGNAL_NAMES = [
   'connectionChanged', // {status: 'connecting'|'open'|'reconnecting'|'closed', retryIn?, message?}
   'characterLoaded', // the snapshot's character (links, shapes, ranges) — a new figure to build
+  'meshLoaded', // the character's skinned mesh is drawn (it arrives after the character)
   'sessionStateChanged', // the snapshot/state fields: pins, keys, clip, layers, playback, undo, ...
   'poseChanged', // a decoded pose frame (the newest one)
   'reportReceived', // the solver's live report
