@@ -250,7 +250,7 @@ SkinnedMesh build_mesh(const aiScene& scene,
     if (out.name.empty()) out.name = mesh->mName.C_Str();
     append_vertices(*mesh, world.A * sm.B, out);
     append_uvs(*mesh, out);
-    if (sm.rigid_node >= 0) {
+    if (sm.carrier_node >= 0) {
       append_rigid_influences(sm, scene_nodes, skeleton, bones, out);
     } else {
       unweighted += append_influences(sm, skeleton, bones, out);

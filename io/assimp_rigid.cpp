@@ -1,6 +1,5 @@
 #include "io/assimp_rigid.hpp"
 
-#include <Eigen/LU>
 #include <stdexcept>
 #include <string>
 
@@ -20,7 +19,7 @@ std::vector<SourceMesh> meshes_carried_by_nodes(const aiScene& scene, const Scen
       if ((mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
       SourceMesh sm;
       sm.mesh = mesh;
-      sm.rigid_node = n;
+      sm.carrier_node = n;
       out.push_back(sm);
     }
   }
@@ -77,8 +76,8 @@ void add_carried_meshes(const aiScene& scene,
                         Warnings& warnings) {
   int added = 0;
   for (const SourceMesh& sm : meshes_carried_by_nodes(scene, nodes)) {
-    const std::string& node = nodes.nodes[sm.rigid_node].name;
-    if (link_at_or_above(sm.rigid_node, nodes, skeleton) < 0) {
+    const std::string& node = nodes.nodes[sm.carrier_node].name;
+    if (link_at_or_above(sm.carrier_node, nodes, skeleton) < 0) {
       warnings.add("mesh '" + std::string(sm.mesh->mName.C_Str()) +
                    "' has no bones and its node '" + node +
                    "' is not on the skeleton: it is left out");
@@ -96,7 +95,7 @@ void add_carried_meshes(const aiScene& scene,
 }
 
 int carrying_link(const SourceMesh& sm, const SceneNodes& nodes, const Skeleton& skeleton) {
-  const int node = link_at_or_above(sm.rigid_node, nodes, skeleton);
+  const int node = link_at_or_above(sm.carrier_node, nodes, skeleton);
   if (node < 0) throw std::logic_error("carrying_link: a carried mesh is not on the skeleton");
   return skeleton.link_of_node[node];
 }
@@ -105,11 +104,15 @@ void place_carried_meshes(const SceneNodes& nodes,
                           const Skeleton& skeleton,
                           SkinnedMeshes& skinned) {
   for (SourceMesh& sm : skinned.meshes) {
-    if (sm.rigid_node < 0) continue;
+    if (sm.carrier_node < 0) continue;
     const int link = carrying_link(sm, nodes, skeleton);
-    const Matrix4& link_rest = nodes.nodes[skeleton.links[link]].global_rest;
-    sm.B =
-        skeleton.bind_global[link] * link_rest.inverse() * nodes.nodes[sm.rigid_node].global_rest;
+    // rest(L)⁻¹ · rest(N) as the product of the local rest transforms below L down to N: no
+    // inverse of rest(L), which a scale of zero at or above L would make unusable
+    Matrix4 below_link = Matrix4::Identity();
+    for (int n = sm.carrier_node; n != skeleton.links[link]; n = nodes.nodes[n].parent) {
+      below_link = nodes.nodes[n].local_rest * below_link;
+    }
+    sm.B = skeleton.bind_global[link] * below_link;
   }
 }
 

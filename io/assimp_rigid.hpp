@@ -13,7 +13,7 @@
 namespace io::assimp_detail {
 
 /// The nodes the animations of `scene` move (SkinnedMeshes::moved_nodes) and every triangle mesh
-/// without bones a node carries (SourceMesh::rigid_node), one entry per node that carries it.
+/// without bones a node carries (SourceMesh::carrier_node), one entry per node that carries it.
 /// Adds a warning saying what was imported so.
 /// @throws std::runtime_error when no animation moves a node: then the file has no skeleton
 SkinnedMeshes collect_moved_nodes(const aiScene& scene,
@@ -29,7 +29,7 @@ void add_carried_meshes(const aiScene& scene,
                         Warnings& warnings);
 
 /// The link a carried mesh follows: that of its node, else of the nearest node above it that is
-/// a link. Requires: a link at or above sm.rigid_node.
+/// a link. Requires: a link at or above sm.carrier_node.
 int carrying_link(const SourceMesh& sm, const SceneNodes& nodes, const Skeleton& skeleton);
 
 /// B of every carried mesh: its node's rest pose carried by its link from rest to bind,

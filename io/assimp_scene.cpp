@@ -181,7 +181,7 @@ Matrix4 offset_for(const SourceMesh& sm, int node) {
 void mesh_bind_spaces(const SceneNodes& scene, SkinnedMeshes& skinned) {
   const std::vector<Node>& nodes = scene.nodes;
   for (SourceMesh& sm : skinned.meshes) {
-    if (sm.rigid_node >= 0) continue;  // placed by place_carried_meshes
+    if (sm.carrier_node >= 0) continue;  // placed by place_carried_meshes
     int top = -1;
     for (int node : sm.bone_node) {
       if (node >= 0 && (top < 0 || nodes[node].depth < nodes[top].depth)) top = node;

@@ -81,20 +81,21 @@ struct WorldAxes {
 /// @param ext  the file's extension, lower case (".fbx" reads the FBX metadata)
 WorldAxes world_axes(const aiScene& scene, const std::string& ext, Warnings& warnings);
 
-/// A triangle mesh of the file: skinned by its bones, or (a file without skinned meshes) carried
-/// whole by a node.
+/// A triangle mesh of the file: skinned by its bones, or without bones and carried whole by a node
+/// (io/assimp_rigid.hpp).
 struct SourceMesh {
   const aiMesh* mesh = nullptr;
   std::vector<int> bone_node;  // node of each aiBone, or -1
   // a mesh without bones: the node that carries it (its vertices are in that node's frame); it
   // follows the link of that node, or of the nearest node above it that is a link
-  int rigid_node = -1;
-  Matrix4 B = Matrix4::Identity();  // bind space → file world (set by mesh_bind_spaces)
+  int carrier_node = -1;
+  // bind space → file world (set by mesh_bind_spaces, for a carried mesh by place_carried_meshes)
+  Matrix4 B = Matrix4::Identity();
 };
 
 /// The meshes and what becomes a link: the skinned triangle meshes and the offset matrix of every
-/// bone node or, in a file without skinned meshes, the nodes its animations move and the meshes
-/// its nodes carry.
+/// bone node or, in a file without skinned meshes, the nodes its animations move; and the meshes
+/// without bones that nodes carry (io/assimp_rigid.hpp).
 struct SkinnedMeshes {
   std::vector<SourceMesh> meshes;
   std::map<int, Matrix4> offset;   // bone node → offset matrix (first mesh naming it)

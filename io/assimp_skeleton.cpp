@@ -59,7 +59,7 @@ Skeleton choose_links(const SceneNodes& scene, const SkinnedMeshes& skinned, War
   if (bones.empty()) throw std::logic_error("choose_links: no bone and no moved node");
   std::vector<int> under = bones;
   for (const SourceMesh& sm : skinned.meshes) {
-    if (sm.rigid_node >= 0) under.push_back(sm.rigid_node);
+    if (sm.carrier_node >= 0) under.push_back(sm.carrier_node);
   }
   s.root = common_root(nodes, under);
   std::vector<char> is_link(nodes.size(), 0);

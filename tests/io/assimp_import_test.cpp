@@ -873,6 +873,14 @@ TEST(AssimpImport, AMeshWithoutBonesUnderABoneFollowsItAndOneBesideTheSkeletonIs
   j["nodes"][hand]["rotation"] = {0.3, 0.1, 0, std::sqrt(1 - 0.09 - 0.01)};
   j["nodes"].push_back({{"name", "plate"}, {"mesh", mesh}});
   j["scenes"][0]["nodes"].push_back(nodes + 1);
+  // a part hidden by a node scaled to zero, as rigs hide what they do not show: it collapses to
+  // that node's origin
+  j["nodes"].push_back({{"name", "holster"},
+                        {"scale", {0, 0, 0}},
+                        {"translation", {0, 0.1, 0}},
+                        {"children", {nodes + 3}}});
+  j["nodes"].push_back({{"name", "dagger"}, {"mesh", mesh}});
+  j["nodes"][hand]["children"].push_back(nodes + 2);
   j["buffers"][0] = {{"uri", "figure.bin"}, {"byteLength", doc.bin.size()}};
   gltf_test::TempDir dir;
   gltf_test::write_bytes(dir.path("figure.bin"), std::string(doc.bin.begin(), doc.bin.end()));
@@ -883,17 +891,17 @@ TEST(AssimpImport, AMeshWithoutBonesUnderABoneFollowsItAndOneBesideTheSkeletonIs
   const auto warned = [&](const std::string& text) {
     return std::find(s.warnings.begin(), s.warnings.end(), text) != s.warnings.end();
   };
-  EXPECT_TRUE(
-      warned("figure.gltf: mesh 'meshes[1]' has no bones and its node 'plate' is not on the "
-             "skeleton: it is left "
-             "out"));
   EXPECT_TRUE(warned(
-      "figure.gltf: 1 mesh without bones moves rigidly with the link of the node that carries "
-      "it"));
+      "figure.gltf: mesh 'meshes[1]' has no bones and its node 'plate' is not on the skeleton: "
+      "it is left out"));
+  EXPECT_TRUE(warned(
+      "figure.gltf: 2 meshes without bones move rigidly with the links of the nodes that carry "
+      "them"));
   // the prop is the last part: its three vertices, each on the hand alone, where the hand
   // carries them in every frame
   ASSERT_EQ(s.clips.size(), 1u);
-  const int first = static_cast<int>(s.mesh.positions.size()) - 3;
+  const int first =
+      static_cast<int>(s.mesh.positions.size()) - 6;  // the sword's, then the dagger's
   const int hand_link = s.model->link_index("r_hand");
   core::Data source(*m), imported(*s.model);
   double worst = 0;
@@ -910,6 +918,11 @@ TEST(AssimpImport, AMeshWithoutBonesUnderABoneFollowsItAndOneBesideTheSkeletonIs
       const Vector3 local(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
       const Vector3 expected = source.X_W[m->link_index("r_hand")] * Vector3(grip + local);
       worst = std::max(worst, (skinned - expected).norm());
+      const Vector3 dagger =
+          imported.X_W[hand_link] *
+          (s.mesh.inverse_bind[bone] * s.mesh.positions[first + 3 + v].cast<double>());
+      const Vector3 holster = source.X_W[m->link_index("r_hand")] * Vector3(0, 0.1, 0);
+      worst = std::max(worst, (dagger - holster).norm());
     }
   }
   EXPECT_LE(worst, 1e-5);
