@@ -34,6 +34,7 @@
 #include "io/sandbox.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/io/gltf_reader.hpp"
+#include "tests/io/stick_figure_document.hpp"
 
 namespace {
 
@@ -828,11 +829,8 @@ TEST(AssimpImport, MeshesOfARigidMechanismFollowTheirNodesWhole) {
 TEST(AssimpImport, AMeshWithoutBonesUnderABoneFollowsItAndOneBesideTheSkeletonIsLeftOut) {
   const auto m = core::build_human_figure({});
   const core::Clip clip = moving_clip(*m);
-  io::GltfExportOptions stick;
-  stick.stick_figure = true;
   std::vector<std::string> errors;
-  gltf_test::Document doc =
-      gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr, stick), errors);
+  gltf_test::Document doc = gltf_test::stick_figure_document(*m, clip, errors);
   ASSERT_TRUE(errors.empty()) << errors.front();
   // one triangle appended to the buffer: its positions, then its indices
   const float positions[9] = {0, 0, 0, 0.2f, 0, 0, 0, 0, 0.2f};

@@ -19,6 +19,7 @@
 #include "core/human_figure.hpp"
 #include "io/gltf.hpp"
 #include "tests/io/gltf_reader.hpp"
+#include "tests/io/stick_figure_document.hpp"
 #include "tests/server/ws_test_client.hpp"
 
 namespace {
@@ -178,11 +179,8 @@ TEST_F(LimitsTest, AGltfOpensWithTheBufferFilesSentBesideIt) {
   const auto m = core::build_human_figure({});
   core::Clip clip;
   clip.frames = {core::neutral_configuration(*m), core::neutral_configuration(*m)};
-  io::GltfExportOptions stick;
-  stick.stick_figure = true;
   std::vector<std::string> errors;
-  gltf_test::Document doc =
-      gltf_test::parse_gltf(io::write_gltf(*m, &clip, nullptr, stick), errors);
+  gltf_test::Document doc = gltf_test::stick_figure_document(*m, clip, errors);
   ASSERT_TRUE(errors.empty()) << errors.front();
   doc.json["buffers"][0]["uri"] = "figure%20data.bin";  // percent-encoded, as URIs are
   const std::string gltf = doc.json.dump();
