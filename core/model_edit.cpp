@@ -1,5 +1,6 @@
 #include "core/model_edit.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/bounds.hpp"
@@ -73,6 +74,61 @@ Grounded stand_on_ground(const std::shared_ptr<const Model>& model) {
   out.model = builder.finalize();
   out.lift = -b.min.y();
   out.floated = float_root;
+  return out;
+}
+
+namespace {
+
+// The lowest height the figure reaches over the frames: skinned vertices when there is a mesh,
+// else the links' shapes; +inf when there is nothing to measure.
+double lowest_height_over(const Model& model,
+                          const std::vector<Eigen::VectorXd>& frames,
+                          const SkinnedMesh* skin) {
+  const bool use_mesh = skin != nullptr && !skin->empty();
+  const std::size_t n = frames.size();
+  std::size_t stride = 1;
+  if (use_mesh && n > 1) {
+    const double frames_allowed = std::max(2.0, kGroundingVertexFrames / skin->positions.size());
+    stride = static_cast<std::size_t>(std::ceil((n - 1) / std::max(1.0, frames_allowed - 1)));
+  }
+  std::vector<std::size_t> measured;  // the frames measured: every stride-th, and the last
+  for (std::size_t f = 0; f < n; f += stride) measured.push_back(f);
+  if (n > 0 && measured.back() != n - 1) measured.push_back(n - 1);
+  std::vector<Transform> X_P(model.njoints), X_W(model.njoints), X_skin;
+  Data data(model);
+  double lowest = kInfinity;
+  for (std::size_t f : measured) {
+    if (use_mesh) {
+      forward_kinematics(model, frames[f], X_P, X_W);
+      for (const Vector3& p : skinned_positions(*skin, X_W, X_skin))
+        lowest = std::min(lowest, p.y());
+    } else {
+      forward_kinematics(model, data, frames[f]);
+      const Bounds b = world_bounds(model, data);
+      if (!b.empty()) lowest = std::min(lowest, b.min.y());
+    }
+  }
+  return lowest;
+}
+
+}  // namespace
+
+Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
+                                const std::vector<Eigen::VectorXd>& frames,
+                                const SkinnedMesh* skin) {
+  Grounded out{model, 0.0, false};
+  if (model->njoints < 2) return out;
+  const double lowest = frames.empty()
+                            ? lowest_height_over(*model, {rest_configuration(*model)}, skin)
+                            : lowest_height_over(*model, frames, skin);
+  if (!std::isfinite(lowest)) return out;
+  // already standing, to rounding relative to the figure's height
+  const double height = neutral_height(*model);
+  if (std::abs(lowest) <= 1e-12 * std::max(1.0, height)) return out;
+  ModelBuilder builder = to_builder(*model);
+  builder.link(0).joint.X_PJ.p.y() -= lowest;
+  out.model = builder.finalize();
+  out.lift = -lowest;
   return out;
 }
 

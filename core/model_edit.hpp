@@ -7,6 +7,7 @@
 
 #include "core/model.hpp"
 #include "core/model_builder.hpp"
+#include "core/skin.hpp"
 
 namespace core {
 
@@ -34,5 +35,18 @@ struct Grounded {
 /// stands on its limbs, not on its root, unlike an arm bolted at its base) becomes free, so the
 /// whole figure can be posed and pinned by its feet. A model without extent is returned as it is.
 Grounded stand_on_ground(const std::shared_ptr<const Model>& model);
+
+/// Places an imported figure and its motion on the ground: the root joint's placement X_PJ moves
+/// vertically so the lowest point the figure reaches over `frames` (the rest configuration when
+/// there are none) is at y = 0. The lowest point is that of the skinned mesh when `skin` has
+/// vertices (what the page draws), else of the links' shapes (world_bounds). The frames need no
+/// change: joint coordinates are relative to the placement, so the whole motion moves with it,
+/// and so does a skin (its bind pose follows the links). A mesh of V vertices is skinned on at
+/// most kGroundingVertexFrames / V frames spread evenly over the clip (always its first and last).
+/// A figure without extent, or already on the ground to rounding, is returned as it is.
+Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
+                                const std::vector<Eigen::VectorXd>& frames,
+                                const SkinnedMesh* skin);
+inline constexpr double kGroundingVertexFrames = 2e7;
 
 }  // namespace core

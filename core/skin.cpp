@@ -58,4 +58,24 @@ std::string check_mesh_materials(const SkinnedMesh& mesh) {
   return {};
 }
 
+std::vector<Vector3> skinned_positions(const SkinnedMesh& skin,
+                                       const std::vector<Transform>& X_W,
+                                       std::vector<Transform>& X_skin) {
+  X_skin.resize(skin.bones.size());
+  for (std::size_t j = 0; j < skin.bones.size(); ++j)
+    X_skin[j] = X_W[skin.bones[j]] * skin.inverse_bind[j];
+  std::vector<Vector3> p_W(skin.positions.size());
+  for (std::size_t v = 0; v < skin.positions.size(); ++v) {
+    const Vector3 p_bind = skin.positions[v].cast<double>();
+    const auto& w = skin.weights[v];
+    const double total = double{w[0]} + w[1] + w[2] + w[3];
+    Vector3 p = Vector3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      if (w[k] != 0.0f) p += (w[k] / total) * (X_skin[skin.joints[v][k]] * p_bind);
+    }
+    p_W[v] = p;
+  }
+  return p_W;
+}
+
 }  // namespace core

@@ -54,4 +54,12 @@ std::string image_mime_type(const std::string& bytes);
 /// mime type says. Otherwise the first rule broken, naming the part, texture or vertex.
 std::string check_mesh_materials(const SkinnedMesh& mesh);
 
+/// The mesh's vertices in the world with its links at X_W (world pose per link, as forward
+/// kinematics gives them): linear blend skinning, p = Σ_k w_k · X_W[bone_k] · inverse_bind_k ·
+/// p_bind with the weights normalized to sum 1. X_skin receives each bone's bind → posed transform
+/// (X_W[bone] · inverse_bind), which the caller may reuse (normals).
+std::vector<Vector3> skinned_positions(const SkinnedMesh& skin,
+                                       const std::vector<Transform>& X_W,
+                                       std::vector<Transform>& X_skin);
+
 }  // namespace core

@@ -78,28 +78,6 @@ void append_shapes(const core::Model& model,
   }
 }
 
-// linear blend skinning of the bind-pose vertices to the pose (world frame)
-std::vector<Vector3> skinned_positions(const core::SkinnedMesh& skin,
-                                       const core::Data& posed,
-                                       std::vector<core::Transform>& X_skin) {
-  // X_skin[j]: bind pose → posed, world frame
-  X_skin.resize(skin.bones.size());
-  for (std::size_t j = 0; j < skin.bones.size(); ++j)
-    X_skin[j] = posed.X_W[skin.bones[j]] * skin.inverse_bind[j];
-  std::vector<Vector3> p_W(skin.positions.size());
-  for (std::size_t v = 0; v < skin.positions.size(); ++v) {
-    const Vector3 p_bind = skin.positions[v].cast<double>();
-    const auto& w = skin.weights[v];
-    const double total = double{w[0]} + w[1] + w[2] + w[3];
-    Vector3 p = Vector3::Zero();
-    for (int k = 0; k < 4; ++k) {
-      if (w[k] != 0.0f) p += (w[k] / total) * (X_skin[skin.joints[v][k]] * p_bind);
-    }
-    p_W[v] = p;
-  }
-  return p_W;
-}
-
 void append_skin(const core::SkinnedMesh& skin,
                  const std::vector<Vector3>& p_W,
                  const std::vector<core::Transform>& X_skin,
@@ -321,7 +299,7 @@ ThumbnailScene build_thumbnail_scene(const core::Model& model,
   std::vector<core::Transform> X_skin;
   std::vector<Vector3> skin_W;
   if (skinned) {
-    skin_W = skinned_positions(*skin, posed, X_skin);
+    skin_W = core::skinned_positions(*skin, posed.X_W, X_skin);
     for (const Vector3& p : skin_W) bounds.add(p);
   }
   const core::Bounds neutral_bounds = core::world_bounds(model, neutral);

@@ -160,6 +160,9 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
     io::BvhImport imported = load_bvh(path, limits, nullptr, bvh_scale);
+    // the capture's floor is where its figure stands: its lowest point over the clip at y = 0
+    imported.model =
+        core::stand_motion_on_ground(imported.model, imported.clip.frames, nullptr).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
     session->set_bvh_source(std::make_shared<const io::BvhLayout>(std::move(imported.layout)));
@@ -168,6 +171,11 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   }
   if (is_assimp_format(ext)) {
     io::SkinnedImport imported = load_skinned(path, limits);
+    // standing on the ground: the lowest point of its mesh (or links) over the clip at y = 0
+    static const std::vector<Eigen::VectorXd> kNoFrames;
+    const std::vector<Eigen::VectorXd>& frames =
+        imported.clips.empty() ? kNoFrames : imported.clips.front().clip.frames;
+    imported.model = core::stand_motion_on_ground(imported.model, frames, &imported.mesh).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
     // an animation-only file (a skeleton without its mesh) is drawn as capsules

@@ -7,8 +7,10 @@
 #include <map>
 #include <thread>
 
+#include "core/bounds.hpp"
 #include "core/configuration.hpp"
 #include "core/human_figure.hpp"
+#include "core/kinematics.hpp"
 #include "io/gltf.hpp"
 #include "tests/fixtures/fixtures.hpp"
 #include "tests/server/actor_hold.hpp"
@@ -675,6 +677,77 @@ TEST_F(ServerTest, AnAnimationWithoutItsMeshOpensAsACharacterAndRetargetsAsAClip
   ASSERT_TRUE(loaded);
   ASSERT_EQ(loaded->status, 200) << loaded->body;
   EXPECT_EQ(snapshot(human).at("clip").at("frames"), 10);
+}
+
+// A figure saved with its pelvis at the origin (its legs under the floor) opens standing on the
+// ground: every link straight up by the depth of the lowest point its mesh reaches over the clip.
+// A BVH capture the same: its legs' end sites come up onto the floor.
+TEST_F(ServerTest, AnUploadedFigureAndItsClipOpenStandingOnTheGround) {
+  const auto m = core::build_human_figure({});
+  core::Clip clip;
+  double lowest = std::numeric_limits<double>::infinity();  // of the links' shapes, over the clip
+  core::Data data(*m);
+  for (int k = 0; k < 10; ++k) {
+    Eigen::VectorXd q = core::random_configuration(*m, 300 + k);
+    // the pelvis at height 0 (the root's placement stands the figure; its coordinates undo that),
+    // walking along x
+    q.head<3>() = m->X_PJ[1].R.transpose() * (core::Vector3(0.1 * k, 0, 0) - m->X_PJ[1].p);
+    clip.frames.push_back(q);
+    core::forward_kinematics(*m, data, q);
+    lowest = std::min(lowest, core::world_bounds(*m, data).min.y());
+  }
+  ASSERT_LT(lowest, -0.5);
+  core::forward_kinematics(*m, data, clip.frames[0]);
+  // the links' shapes as the file's mesh (tessellated: its lowest point is within 2 mm of theirs)
+  io::GltfExportOptions shapes;
+  shapes.shape_mesh = true;
+  const std::vector<std::uint8_t> glb = io::write_glb(*m, &clip, nullptr, shapes);
+  auto c = http();
+  const auto opened =
+      c.Post("/api/sessions", {{"Origin", origin()}},
+             httplib::MultipartFormDataItems{{"character", std::string(glb.begin(), glb.end()),
+                                              "low.glb", "model/gltf-binary"}});
+  ASSERT_TRUE(opened);
+  ASSERT_EQ(opened->status, 201) << opened->body;
+  const json created = json::parse(opened->body);
+  const json snap = snapshot({created.at("id"), created.at("token")});
+  EXPECT_EQ(snap.at("character").at("skinned"), true);
+  int compared = 0;
+  for (const json& link : snap.at("links")) {
+    const int i = m->link_index(link.at("name").get<std::string>());
+    if (i < 0) continue;
+    const core::Vector3 p(link.at("p")[0], link.at("p")[1], link.at("p")[2]);
+    const core::Vector3 expected = data.X_W[i].p + core::Vector3(0, -lowest, 0);
+    EXPECT_LT((p - expected).norm(), 2e-3)
+        << link.at("name") << ": " << p.transpose() << " expected " << expected.transpose();
+    ++compared;
+  }
+  EXPECT_EQ(compared, m->nlinks());
+
+  // a capture whose hips are at the origin and legs 0.9 m long
+  const std::string bvh =
+      "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n"
+      " CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+      " JOINT LeftUpLeg\n {\n  OFFSET 10 0 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "  JOINT LeftLeg\n  {\n   OFFSET 0 -45 0\n   CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "   End Site\n   {\n    OFFSET 0 -45 0\n   }\n  }\n }\n"
+      " JOINT Spine\n {\n  OFFSET 0 10 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "  End Site\n  {\n   OFFSET 0 60 0\n  }\n }\n}\n"
+      "MOTION\nFrames: 2\nFrame Time: 0.033333\n"
+      "0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n10 0 0 0 0 0 0 30 0 0 -20 0 0 0 0\n";
+  const auto captured =
+      c.Post("/api/sessions", {{"Origin", origin()}},
+             httplib::MultipartFormDataItems{{"character", bvh, "low.bvh", "text/plain"}});
+  ASSERT_TRUE(captured);
+  ASSERT_EQ(captured->status, 201) << captured->body;
+  const json made = json::parse(captured->body);
+  double lowest_origin = std::numeric_limits<double>::infinity();
+  const json captured_snap = snapshot({made.at("id"), made.at("token")});
+  for (const json& link : captured_snap.at("links"))
+    lowest_origin = std::min(lowest_origin, link.at("p")[1].get<double>());
+  // the foot's end site was 0.9 m under the floor; now above it by no more than a capsule radius
+  EXPECT_GE(lowest_origin, 0.0);
+  EXPECT_LT(lowest_origin, 0.1);
 }
 
 TEST_F(ServerTest, OversizeMessageClosesWith1009) {

@@ -3,7 +3,7 @@
 // session while the one left stays saved; "Load clip…" with a clip of another skeleton offers to
 // open it as its own character, which brings the clip, or to retarget it onto this character; a
 // malformed file is refused with a message naming it and the session stays as it was. Every file
-// of ../shared/data/{bvh,gltf,urdf} opens as a session; the URDF robots stand on the ground; a
+// of ../shared/data/{bvh,gltf,urdf} opens as a session standing on the ground; a
 // BVH opens in the unit guessed from its height or in the one chosen. "Load clip…" with a marker
 // trial (C3D) fits it onto the human figure.
 // Usage: node tests/web/open_files_test.mjs PINDRAG_BINARY   (or PINDRAG_BIN=...)
@@ -405,11 +405,12 @@ test('every file of the shared bvh, gltf and urdf folders opens as a session', {
     const s = await server.snapshot(id, token);
     console.log(`${path.relative(DATA_DIR, file)}: ${s.character.links.length} links, clip ${s.clip ? s.clip.frames : 0} frames`);
     assert.ok(s.character.links.length >= 2, `${file}: ${s.character.links.length} links`);
+    // every figure stands on the ground (its lowest point at y = 0), none of its links under it
+    const lowest = Math.min(...s.links.map((l) => l.p[1]));
+    console.log(`  root ${s.character.links[0].joint_type}, lowest link origin at y = ${lowest.toFixed(3)} m`);
+    assert.ok(lowest >= -1e-6, `${file}: a link origin at y = ${lowest}`);
     if (file.endsWith('.urdf')) {
-      // robot descriptions (all legged here) stand on the ground on a free root
-      const lowest = Math.min(...s.links.map((l) => l.p[1]));
-      console.log(`  root ${s.character.links[0].joint_type}, lowest link origin at y = ${lowest.toFixed(3)} m`);
-      assert.ok(lowest >= -1e-9, `${file}: a link origin at y = ${lowest}`);
+      // robot descriptions (all legged here) stand on a free root
       assert.equal(s.character.links[0].joint_type, 'free', `${file}: the root of a legged robot floats`);
     }
   }
