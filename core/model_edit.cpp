@@ -51,6 +51,23 @@ std::shared_ptr<const Model> weld_root(const std::shared_ptr<const Model>& model
   return b.finalize();
 }
 
+namespace {
+
+// `model` with its root joint's placement raised by `lift` (m, down when negative); its root
+// joint becomes free when `float_root`
+std::shared_ptr<const Model> raise_root(const Model& model, double lift, bool float_root) {
+  ModelBuilder builder = to_builder(model);
+  JointSpec& root = builder.link(0).joint;
+  root.X_PJ.p.y() += lift;
+  if (float_root) {
+    root.type = JointType::kFree;
+    root.limits = JointLimits{};
+  }
+  return builder.finalize();
+}
+
+}  // namespace
+
 Grounded stand_on_ground(const std::shared_ptr<const Model>& model) {
   Grounded out{model, 0.0, false};
   if (model->njoints < 2) return out;
@@ -64,14 +81,7 @@ Grounded stand_on_ground(const std::shared_ptr<const Model>& model) {
   const bool float_root = legged && model->joint_type[1] == JointType::kFixed;
   // already standing (to rounding: a placed figure placed again is itself)
   if (std::abs(b.min.y()) <= 1e-12 * b.size().y() && !float_root) return out;
-  ModelBuilder builder = to_builder(*model);
-  JointSpec& root = builder.link(0).joint;
-  root.X_PJ.p.y() -= b.min.y();
-  if (float_root) {
-    root.type = JointType::kFree;
-    root.limits = JointLimits{};
-  }
-  out.model = builder.finalize();
+  out.model = raise_root(*model, -b.min.y(), float_root);
   out.lift = -b.min.y();
   out.floated = float_root;
   return out;
@@ -89,21 +99,20 @@ double lowest_height_over(const Model& model,
   std::size_t stride = 1;
   if (use_mesh && n > 1) {
     const double frames_allowed = std::max(2.0, kGroundingVertexFrames / skin->positions.size());
-    stride = static_cast<std::size_t>(std::ceil((n - 1) / std::max(1.0, frames_allowed - 1)));
+    stride = static_cast<std::size_t>(std::ceil((n - 1) / (frames_allowed - 1)));
   }
   std::vector<std::size_t> measured;  // the frames measured: every stride-th, and the last
   for (std::size_t f = 0; f < n; f += stride) measured.push_back(f);
   if (n > 0 && measured.back() != n - 1) measured.push_back(n - 1);
-  std::vector<Transform> X_P(model.njoints), X_W(model.njoints), X_skin;
   Data data(model);
+  std::vector<Transform> X_skin;
   double lowest = kInfinity;
   for (std::size_t f : measured) {
+    forward_kinematics(model, data, frames[f]);
     if (use_mesh) {
-      forward_kinematics(model, frames[f], X_P, X_W);
-      for (const Vector3& p : skinned_positions(*skin, X_W, X_skin))
+      for (const Vector3& p : skinned_positions(*skin, data.X_W, X_skin))
         lowest = std::min(lowest, p.y());
     } else {
-      forward_kinematics(model, data, frames[f]);
       const Bounds b = world_bounds(model, data);
       if (!b.empty()) lowest = std::min(lowest, b.min.y());
     }
@@ -125,9 +134,7 @@ Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
   // already standing, to rounding relative to the figure's height
   const double height = neutral_height(*model);
   if (std::abs(lowest) <= 1e-12 * std::max(1.0, height)) return out;
-  ModelBuilder builder = to_builder(*model);
-  builder.link(0).joint.X_PJ.p.y() -= lowest;
-  out.model = builder.finalize();
+  out.model = raise_root(*model, -lowest, false);
   out.lift = -lowest;
   return out;
 }
