@@ -1,10 +1,15 @@
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
+#include "animator/facing.hpp"
 #include "cli/clip_file.hpp"
 #include "cli/commands.hpp"
 #include "core/bounds.hpp"
+#include "core/configuration.hpp"
+#include "core/kinematics.hpp"
 #include "io/bundled_characters.hpp"
 #include "io/c3d.hpp"
 #include "io/read_file.hpp"
@@ -12,6 +17,21 @@
 namespace cli {
 
 namespace {
+
+// which way the figure faces in pose `q` and the left/right links that tell it (the page turns it
+// to face +Z when it opens: animator/facing.hpp); null when its names tell no sides
+nlohmann::json facing_summary(const core::Model& m, const Eigen::VectorXd& q) {
+  const auto pairs = animator::left_right_pairs(m);
+  core::Data data(m);
+  core::forward_kinematics(m, data, q);
+  const auto facing = animator::facing_direction(data, pairs);
+  if (!facing) return nullptr;
+  nlohmann::json from = nlohmann::json::array();
+  for (const auto& [l, r] : pairs) from.push_back({m.link_name[l], m.link_name[r]});
+  return {{"direction", {facing->x(), 0.0, facing->z()}},
+          {"degrees_from_plus_z", std::atan2(facing->x(), facing->z()) * 180 / std::numbers::pi},
+          {"from", from}};
+}
 
 nlohmann::json character_summary(const core::Model& m, const std::vector<std::string>& warnings) {
   std::map<std::string, int> by_type;
@@ -26,6 +46,7 @@ nlohmann::json character_summary(const core::Model& m, const std::vector<std::st
   out["height"] = core::neutral_height(m);
   out["root"] = m.link_name[1];
   out["root_joint"] = core::to_string(m.joint_type[1]);
+  out["facing"] = facing_summary(m, core::rest_configuration(m));
   out["warnings"] = warnings;
   return out;
 }
@@ -36,6 +57,8 @@ nlohmann::json clip_summary(const std::string& path) {
   const ClipFile f = read_clip_file(path);
   const core::Model& m = *f.model;
   nlohmann::json out = character_summary(m, f.warnings);
+  // where the clip starts, as the page shows it
+  if (f.clip.size() > 0) out["facing"] = facing_summary(m, f.clip.frames.front());
   int moving = 0;
   for (int i = 1; i < m.njoints; ++i) moving += m.joint_type[i] != core::JointType::kFixed;
   nlohmann::json clip;

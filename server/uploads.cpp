@@ -8,8 +8,10 @@
 #include <filesystem>
 #include <system_error>
 
+#include "animator/facing.hpp"
 #include "animator/marker_trial.hpp"
 #include "animator/retarget.hpp"
+#include "core/configuration.hpp"
 #include "core/model_edit.hpp"
 #include "io/assimp_import.hpp"
 #include "io/bvh.hpp"
@@ -127,6 +129,14 @@ io::BvhImport load_bvh(const std::string& path,
   return io::load_bvh_file(path, options);
 }
 
+// the figure turned to face +Z in the clip's first frame (its rest pose when there is no clip)
+std::shared_ptr<const core::Model> face_forward_at_start(
+    const std::shared_ptr<const core::Model>& model, const std::vector<Eigen::VectorXd>& frames) {
+  return animator::face_forward(model,
+                                frames.empty() ? core::rest_configuration(*model) : frames.front())
+      .model;
+}
+
 io::SkinnedImport load_skinned(const std::string& path, const animator::Limits& limits) {
   io::ImportOptions options;
   options.budget = animator::clip_budget(limits);
@@ -160,7 +170,9 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
     io::BvhImport imported = load_bvh(path, limits, nullptr, bvh_scale);
-    // the capture's floor is where its figure stands: its lowest point over the clip at y = 0
+    // facing +Z where the clip starts, and the capture's floor where its figure stands: its
+    // lowest point over the clip at y = 0
+    imported.model = face_forward_at_start(imported.model, imported.clip.frames);
     imported.model =
         core::stand_motion_on_ground(imported.model, imported.clip.frames, nullptr).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
@@ -171,10 +183,12 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   }
   if (is_assimp_format(ext)) {
     io::SkinnedImport imported = load_skinned(path, limits);
-    // standing on the ground: the lowest point of its mesh (or links) over the clip at y = 0
+    // facing +Z where the clip starts, standing on the ground: the lowest point of its mesh (or
+    // links) over the clip at y = 0
     static const std::vector<Eigen::VectorXd> kNoFrames;
     const std::vector<Eigen::VectorXd>& frames =
         imported.clips.empty() ? kNoFrames : imported.clips.front().clip.frames;
+    imported.model = face_forward_at_start(imported.model, frames);
     imported.model = core::stand_motion_on_ground(imported.model, frames, &imported.mesh).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
@@ -190,7 +204,10 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   std::shared_ptr<const core::Model> model = io::load_model_file(path).model;
   // a robot description puts its root at the world origin: stand it on the ground (legged ones
   // on a free root)
-  if (ext == ".urdf") model = core::stand_on_ground(model).model;
+  if (ext == ".urdf") {
+    model = animator::face_forward(model, core::rest_configuration(*model)).model;
+    model = core::stand_on_ground(model).model;
+  }
   auto session = std::make_unique<animator::Session>(std::move(model), name);
   session->set_limits(limits);
   return session;

@@ -2,6 +2,7 @@
 // (exit status, stdout, stderr) on the shared CMU walk, plus the edit script reader directly.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -200,16 +201,25 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
   EXPECT_NEAR(j.at("clip").at("duration").get<double>(), 343 * 0.0083333, 1e-9);
   EXPECT_EQ(j.at("clip").at("joints"), 31);
   EXPECT_EQ(j.at("links"), 31 + 7);  // and 7 End Sites
+  // which way it faces where the clip starts, and from which links (the page turns it to +Z)
+  EXPECT_LT(std::abs(j.at("facing").at("degrees_from_plus_z").get<double>()), 5.0);
+  EXPECT_EQ(j.at("facing").at("from")[0], json({"LeftUpLeg", "RightUpLeg"}));
+  const Outcome boxing = pindrag(dir, "info " + fixtures::data_dir() + "/bvh/boxing_toes_zxy.bvh");
+  ASSERT_EQ(boxing.status, 0) << boxing.err;
+  EXPECT_GT(std::abs(json::parse(boxing.out).at("facing").at("degrees_from_plus_z").get<double>()),
+            170.0);
   // a skinned glTF: its first animation and its mesh
   const Outcome g = pindrag(dir, "info " + fixtures::data_dir() + "/gltf/CesiumMan.glb");
   ASSERT_EQ(g.status, 0) << g.err;
   const json k = json::parse(g.out);
   EXPECT_GT(k.at("clip").at("frames").get<int>(), 1);
   EXPECT_GT(k.at("clip").at("skin").at("vertices").get<int>(), 0);
+  EXPECT_TRUE(k.at("facing").is_null());  // its bones are named nodes[N]: no sides
   // a bundled character still prints its summary, without a clip
   const Outcome h = pindrag(dir, "info human48");
   ASSERT_EQ(h.status, 0) << h.err;
   EXPECT_FALSE(json::parse(h.out).contains("clip"));
+  EXPECT_NEAR(json::parse(h.out).at("facing").at("degrees_from_plus_z").get<double>(), 0.0, 1e-9);
   const Outcome bad = pindrag(dir, "info " + dir.path("nothing.bvh"));
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("nothing.bvh"), std::string::npos) << bad.err;

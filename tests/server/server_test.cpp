@@ -688,7 +688,9 @@ TEST_F(ServerTest, AnUploadedFigureAndItsClipOpenStandingOnTheGround) {
   double lowest = std::numeric_limits<double>::infinity();  // of the links' shapes, over the clip
   core::Data data(*m);
   for (int k = 0; k < 10; ++k) {
-    Eigen::VectorXd q = core::random_configuration(*m, 300 + k);
+    // the first frame stands as the figure was built (facing +Z, so nothing turns it)
+    Eigen::VectorXd q =
+        k == 0 ? core::rest_configuration(*m) : core::random_configuration(*m, 300 + k);
     // the pelvis at height 0 (the root's placement stands the figure; its coordinates undo that),
     // walking along x
     q.head<3>() = m->X_PJ[1].R.transpose() * (core::Vector3(0.1 * k, 0, 0) - m->X_PJ[1].p);

@@ -1,0 +1,134 @@
+#include "animator/facing.hpp"
+
+#include <cctype>
+#include <cmath>
+
+#include "animator/joint_names.hpp"
+#include "core/kinematics.hpp"
+#include "core/model_edit.hpp"
+
+namespace animator {
+
+namespace {
+
+bool is_upper(char c) { return std::isupper(static_cast<unsigned char>(c)) != 0; }
+bool is_lower(char c) { return std::islower(static_cast<unsigned char>(c)) != 0; }
+bool is_digit(char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; }
+bool is_word_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; }
+
+// where a new word starts inside a run of letters and digits: lower → Upper ("leftArm"), the last
+// capital of an acronym before lower case ("LHip"), and letters ↔ digits ("Leg01")
+bool word_starts_at(const std::string& s, std::size_t i) {
+  const char a = s[i - 1], b = s[i];
+  if (is_lower(a) && is_upper(b)) return true;
+  if (is_upper(a) && is_upper(b) && i + 1 < s.size() && is_lower(s[i + 1])) return true;
+  return is_digit(a) != is_digit(b);
+}
+
+std::string lowered(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// `word` → its opposite side in the same letter case ("L" → "R", "Left" → "Right", "left" →
+// "right", "LEFT" → "RIGHT")
+std::string opposite_in_case(const std::string& word, const std::string& opposite) {
+  std::string out = opposite;
+  const bool all_upper = is_upper(word[0]) && (word.size() == 1 || is_upper(word[1]));
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const bool upper = all_upper || (k == 0 && is_upper(word[0]));
+    out[k] = static_cast<char>(upper ? std::toupper(static_cast<unsigned char>(out[k])) : out[k]);
+  }
+  return out;
+}
+
+bool is_ancestor(const core::Model& model, int ancestor, int link) {
+  for (int k = model.parent[link]; k > 0; k = model.parent[k]) {
+    if (k == ancestor) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::optional<std::pair<std::string, bool>> mirrored_name(const std::string& name) {
+  std::size_t i = 0;
+  while (i < name.size()) {
+    if (!is_word_char(name[i])) {
+      ++i;
+      continue;
+    }
+    std::size_t end = i + 1;
+    while (end < name.size() && is_word_char(name[end]) && !word_starts_at(name, end)) ++end;
+    const std::string word = name.substr(i, end - i);
+    const std::string side = lowered(word);
+    if (side == "l" || side == "left" || side == "r" || side == "right") {
+      const bool left = side[0] == 'l';
+      const std::string opposite =
+          side.size() == 1 ? (left ? "r" : "l") : (left ? "right" : "left");
+      return std::make_pair(name.substr(0, i) + opposite_in_case(word, opposite) + name.substr(end),
+                            left);
+    }
+    i = end;
+  }
+  return std::nullopt;
+}
+
+std::vector<std::pair<int, int>> left_right_pairs(const core::Model& model) {
+  std::vector<std::pair<int, int>> pairs;
+  // a humanoid convention: the hips (thighs' origins) and the shoulders (upper arms' origins)
+  const BodyPartGuess parts = guess_body_parts(model);
+  const auto add_part_pair = [&](BodyPart left, BodyPart right) {
+    const int l = parts.link[static_cast<int>(left)], r = parts.link[static_cast<int>(right)];
+    if (l >= 0 && r >= 0 && l != r) pairs.emplace_back(l, r);
+  };
+  add_part_pair(BodyPart::kLeftThigh, BodyPart::kRightThigh);
+  add_part_pair(BodyPart::kLeftUpperArm, BodyPart::kRightUpperArm);
+  if (!pairs.empty()) return pairs;
+
+  // else side words: every left link whose mirrored name is a link, then only the first pair of
+  // each limb (no left link of another pair above it)
+  std::vector<std::pair<int, int>> named;
+  for (int i = 1; i < model.njoints; ++i) {
+    const auto mirrored = mirrored_name(model.link_name[i]);
+    if (!mirrored || !mirrored->second) continue;
+    const int j = model.link_index(mirrored->first);
+    if (j > 0 && j != i) named.emplace_back(i, j);
+  }
+  for (const auto& [l, r] : named) {
+    bool first_of_limb = true;
+    for (const auto& other : named)
+      first_of_limb = first_of_limb && !is_ancestor(model, other.first, l);
+    if (first_of_limb) pairs.emplace_back(l, r);
+  }
+  return pairs;
+}
+
+std::optional<core::Vector3> facing_direction(const core::Data& data,
+                                              const std::vector<std::pair<int, int>>& pairs) {
+  core::Vector3 left = core::Vector3::Zero();
+  for (const auto& [l, r] : pairs) left += data.X_W[l].p - data.X_W[r].p;
+  const core::Vector3 horizontal(left.x(), 0.0, left.z());
+  // more than 30° from vertical: horizontal part at least sin 30° of the whole
+  if (!(left.norm() > 0) || !(horizontal.norm() >= 0.5 * left.norm())) return std::nullopt;
+  // left × up with up = +Y
+  return core::Vector3(-horizontal.z(), 0.0, horizontal.x()).normalized();
+}
+
+Faced face_forward(const std::shared_ptr<const core::Model>& model, const Eigen::VectorXd& q) {
+  Faced out{model, 0.0, false};
+  if (model->njoints < 2) return out;
+  core::Data data(*model);
+  core::forward_kinematics(*model, data, q);
+  const auto facing = facing_direction(data, left_right_pairs(*model));
+  if (!facing) return out;
+  out.known = true;
+  // facing (sin φ, 0, cos φ) turns onto +Z by −φ about +Y
+  const double turn = -std::atan2(facing->x(), facing->z());
+  if (std::abs(turn) <= 1e-9) return out;
+  out.model = core::turn_root_about_vertical(*model, turn, data.X_W[1].p);
+  out.turn = turn;
+  return out;
+}
+
+}  // namespace animator

@@ -1,0 +1,185 @@
+// Tests for animator/facing.hpp: which way a figure faces, read from the left and right links its
+// names tell, and face_forward turning an opened figure (and its clip) to face +Z in place. The
+// checks use what the estimate does not: where the toes point and which side the left hand is on.
+#include "animator/facing.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/configuration.hpp"
+#include "core/human_figure.hpp"
+#include "core/kinematics.hpp"
+#include "core/model_builder.hpp"
+#include "core/model_edit.hpp"
+#include "tests/fixtures/fixtures.hpp"
+
+namespace {
+
+using animator::face_forward;
+using animator::mirrored_name;
+using core::Vector3;
+
+// the horizontal direction from the feet to the toes, both sides summed, normalised
+Vector3 toes_direction(const core::Model& m, const core::Data& d) {
+  Vector3 v = d.X_W[m.link_index("l_toes")].p - d.X_W[m.link_index("l_foot")].p +
+              d.X_W[m.link_index("r_toes")].p - d.X_W[m.link_index("r_foot")].p;
+  v.y() = 0;
+  return v.normalized();
+}
+
+TEST(MirroredName, SwapsTheSideWordInItsOwnCase) {
+  const auto expect = [](const char* name, const char* mirrored, bool left) {
+    const auto m = mirrored_name(name);
+    ASSERT_TRUE(m) << name;
+    EXPECT_EQ(m->first, mirrored) << name;
+    EXPECT_EQ(m->second, left) << name;
+  };
+  expect("LeftUpLeg", "RightUpLeg", true);
+  expect("mixamorig:RightArm", "mixamorig:LeftArm", false);
+  expect("leg_joint_L_1", "leg_joint_R_1", true);
+  expect("Bip01 R Thigh", "Bip01 L Thigh", false);
+  expect("hip.L", "hip.R", true);
+  expect("left_hip_pitch_link", "right_hip_pitch_link", true);
+  expect("LHip", "RHip", true);
+  expect("RIGHT_ARM", "LEFT_ARM", false);
+  expect("b_LeftLeg01_019", "b_RightLeg01_019", true);
+  // no side word: a word that only starts with L or R is not one
+  for (const char* name : {"Hips", "Leg", "Lumbar", "Root", "lthigh", "Ribs_2", "LowerBack"}) {
+    EXPECT_FALSE(mirrored_name(name)) << name;
+  }
+}
+
+TEST(FacingDirection, TheBundledFigureFacesPlusZAndTurnsBackWhenTurned) {
+  const auto m = core::build_human_figure({});
+  core::Data d(*m);
+  const Eigen::VectorXd q = core::rest_configuration(*m);
+  core::forward_kinematics(*m, d, q);
+  const auto pairs = animator::left_right_pairs(*m);
+  ASSERT_EQ(pairs.size(), 2u);  // hips and shoulders
+  const auto facing = animator::facing_direction(d, pairs);
+  ASSERT_TRUE(facing);
+  EXPECT_LT((*facing - Vector3::UnitZ()).norm(), 1e-9);
+  EXPECT_GT(toes_direction(*m, d).z(), 0.99);
+  // already facing +Z: the model itself
+  const animator::Faced same = face_forward(m, q);
+  EXPECT_TRUE(same.known);
+  EXPECT_EQ(same.model, m);
+
+  // turned 110° about a vertical line away from the origin, it turns back in place
+  const auto turned =
+      core::turn_root_about_vertical(*m, 110 * std::numbers::pi / 180, Vector3(2.0, 0.0, -1.0));
+  core::Data dt(*turned);
+  core::forward_kinematics(*turned, dt, q);
+  EXPECT_LT(toes_direction(*turned, dt).z(), 0.0);
+  const animator::Faced back = face_forward(turned, q);
+  ASSERT_TRUE(back.known);
+  EXPECT_NEAR(back.turn, -110 * std::numbers::pi / 180, 1e-9);
+  core::Data db(*back.model);
+  core::forward_kinematics(*back.model, db, q);
+  EXPECT_GT(toes_direction(*back.model, db).z(), 1 - 1e-9);
+  // its left hand to +X, the root where it stood, every link at its height
+  EXPECT_GT(db.X_W[m->link_index("l_hand")].p.x(), db.X_W[m->link_index("r_hand")].p.x());
+  EXPECT_LT((db.X_W[1].p - dt.X_W[1].p).norm(), 1e-12);
+  for (int i = 1; i < m->njoints; ++i) EXPECT_NEAR(db.X_W[i].p.y(), dt.X_W[i].p.y(), 1e-12);
+  // and again: itself
+  EXPECT_EQ(face_forward(back.model, q).model, back.model);
+}
+
+TEST(FacingDirection, AClipTurnsWithItsFirstFrame) {
+  const auto m = core::build_human_figure({});
+  // a figure walking along -X, facing -X (its root yawed -90°) from its first frame on
+  std::vector<Eigen::VectorXd> frames;
+  for (int k = 0; k < 5; ++k) {
+    Eigen::VectorXd q = core::rest_configuration(*m);
+    const core::Quaternion yaw(Eigen::AngleAxisd(-std::numbers::pi / 2, Vector3::UnitY()));
+    core::set_quaternion_at(q, m->idx_q[1] + 3, yaw);
+    q[m->idx_q[1]] = 1.0 - 0.3 * k;
+    frames.push_back(q);
+  }
+  const animator::Faced f = face_forward(m, frames.front());
+  ASSERT_TRUE(f.known);
+  EXPECT_NEAR(f.turn, std::numbers::pi / 2, 1e-9);
+  core::Data d(*f.model);
+  core::forward_kinematics(*f.model, d, frames.front());
+  const Vector3 start = d.X_W[1].p;
+  for (const Eigen::VectorXd& q : frames) {
+    core::forward_kinematics(*f.model, d, q);
+    EXPECT_GT(toes_direction(*f.model, d).z(), 1 - 1e-9);
+  }
+  // the walk goes the way it faces, +Z, from where it started
+  EXPECT_NEAR(d.X_W[1].p.z() - start.z(), 1.2, 1e-9);
+  EXPECT_NEAR(d.X_W[1].p.x() - start.x(), 0.0, 1e-9);
+}
+
+// a four-legged figure named by side words, facing +X: its left legs at -Z
+std::shared_ptr<const core::Model> quadruped() {
+  core::ModelBuilder b("quadruped");
+  core::LinkSpec body = fixtures::box_link("body", "", 20, Vector3(0.8, 0.3, 0.3));
+  body.joint.type = core::JointType::kFree;
+  b.add_link(body);
+  for (const char* side : {"L", "R"}) {
+    for (const char* end : {"front", "back"}) {
+      const std::string leg = std::string("leg_") + side + "_" + end;
+      core::LinkSpec upper = fixtures::box_link(leg, "body", 2, Vector3(0.05, 0.3, 0.05));
+      upper.joint.type = core::JointType::kSpherical;
+      const double x = std::string(end) == "front" ? 0.35 : -0.35;
+      const double z = std::string(side) == "L" ? -0.12 : 0.12;
+      upper.joint.X_PJ = core::Transform::from_translation(Vector3(x, -0.1, z));
+      b.add_link(upper);
+      // the foot is a pair too, splayed outwards: only each limb's first pair counts
+      core::LinkSpec foot = fixtures::box_link(leg + "_foot", leg, 1, Vector3(0.05, 0.05, 0.05));
+      foot.joint.X_PJ = core::Transform::from_translation(Vector3(0.3, -0.3, 2 * z));
+      b.add_link(foot);
+    }
+  }
+  return b.finalize();
+}
+
+TEST(FacingDirection, SideWordsTellAQuadrupedsLeftFromItsFirstPairPerLeg) {
+  const auto m = quadruped();
+  const auto pairs = animator::left_right_pairs(*m);
+  ASSERT_EQ(pairs.size(), 2u);
+  for (const auto& [l, r] : pairs) {
+    EXPECT_EQ(m->link_name[l].substr(0, 6), "leg_L_");
+    EXPECT_EQ(m->link_name[r], "leg_R_" + m->link_name[l].substr(6));
+    EXPECT_EQ(m->link_name[l].find("foot"), std::string::npos);
+  }
+  const Eigen::VectorXd q = core::rest_configuration(*m);
+  const animator::Faced f = face_forward(m, q);
+  ASSERT_TRUE(f.known);
+  EXPECT_NEAR(f.turn, -std::numbers::pi / 2, 1e-9);
+  core::Data d(*f.model);
+  core::forward_kinematics(*f.model, d, q);
+  // front legs ahead (+Z), left legs at +X
+  EXPECT_NEAR(d.X_W[f.model->link_index("leg_L_front")].p.z() -
+                  d.X_W[f.model->link_index("leg_L_back")].p.z(),
+              0.7, 1e-9);
+  EXPECT_NEAR(d.X_W[f.model->link_index("leg_L_front")].p.x() -
+                  d.X_W[f.model->link_index("leg_R_front")].p.x(),
+              0.24, 1e-9);
+}
+
+TEST(FacingDirection, AFigureLyingOnItsSideOrWithoutSidesKeepsItsPlacement) {
+  const auto m = core::build_human_figure({});
+  Eigen::VectorXd q = core::rest_configuration(*m);
+  // lying on its left side: the hips one above the other
+  const core::Quaternion roll(Eigen::AngleAxisd(std::numbers::pi / 2, Vector3::UnitZ()));
+  core::set_quaternion_at(q, m->idx_q[1] + 3, roll);
+  const animator::Faced lying = face_forward(m, q);
+  EXPECT_FALSE(lying.known);
+  EXPECT_EQ(lying.model, m);
+  // nothing named by side
+  core::ModelBuilder b("stick");
+  core::LinkSpec base = fixtures::box_link("base", "", 1, Vector3(0.1, 0.1, 0.1));
+  base.joint.type = core::JointType::kFree;
+  b.add_link(base);
+  b.add_link(fixtures::box_link("tip", "base", 1, Vector3(0.1, 0.1, 0.1)));
+  const auto stick = b.finalize();
+  const animator::Faced unknown = face_forward(stick, core::rest_configuration(*stick));
+  EXPECT_FALSE(unknown.known);
+  EXPECT_EQ(unknown.model, stick);
+}
+
+}  // namespace
