@@ -1,9 +1,12 @@
 #include "animator/facing.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <numbers>
 
 #include "animator/joint_names.hpp"
+#include "core/configuration.hpp"
 #include "core/kinematics.hpp"
 #include "core/model_edit.hpp"
 
@@ -104,8 +107,8 @@ std::vector<std::pair<int, int>> left_right_pairs(const core::Model& model) {
   return pairs;
 }
 
-std::optional<core::Vector3> facing_direction(const core::Data& data,
-                                              const std::vector<std::pair<int, int>>& pairs) {
+std::optional<core::Vector3> facing_from_sides(const core::Data& data,
+                                               const std::vector<std::pair<int, int>>& pairs) {
   core::Vector3 left = core::Vector3::Zero();
   for (const auto& [l, r] : pairs) left += data.X_W[l].p - data.X_W[r].p;
   const core::Vector3 horizontal(left.x(), 0.0, left.z());
@@ -115,16 +118,82 @@ std::optional<core::Vector3> facing_direction(const core::Data& data,
   return core::Vector3(-horizontal.z(), 0.0, horizontal.x()).normalized();
 }
 
+std::vector<std::pair<int, int>> toe_links(const core::Model& model) {
+  std::vector<std::pair<int, int>> toes;
+  if (model.njoints < 3) return toes;
+  core::Data data(model);
+  core::forward_kinematics(model, data, core::rest_configuration(model));
+  double low = core::kInfinity, high = -core::kInfinity;
+  for (int i = 1; i < model.njoints; ++i) {
+    low = std::min(low, data.X_W[i].p.y());
+    high = std::max(high, data.X_W[i].p.y());
+  }
+  const double root_height = data.X_W[1].p.y();
+  core::Vector3 sum = core::Vector3::Zero();
+  std::vector<core::Vector3> horizontals;
+  for (int i = 2; i < model.njoints; ++i) {
+    const int parent = model.parent[i];
+    const double y = data.X_W[i].p.y();
+    const bool leaf = model.subtree_end[i] == i + 1;
+    if (!leaf || parent <= 1 || y > low + 0.15 * (high - low) || !(y < root_height)) continue;
+    const core::Vector3 bone = data.X_W[i].p - data.X_W[parent].p;
+    const core::Vector3 horizontal(bone.x(), 0.0, bone.z());
+    // at least 15° from vertical: sin 15° of the bone horizontal
+    if (!(horizontal.norm() >= std::sin(15 * std::numbers::pi / 180) * bone.norm())) continue;
+    toes.emplace_back(parent, i);
+    horizontals.push_back(horizontal);
+    sum += horizontal;
+  }
+  for (const core::Vector3& h : horizontals) {
+    if (!(h.dot(sum) > 0)) return {};
+  }
+  return toes;
+}
+
+std::optional<core::Vector3> facing_from_toes(const core::Model& model,
+                                              const core::Data& data,
+                                              const std::vector<std::pair<int, int>>& toes) {
+  if (toes.empty()) return std::nullopt;
+  // where the toes point in the rest pose, in the root link's frame, then in this pose
+  core::Data rest(model);
+  core::forward_kinematics(model, rest, core::rest_configuration(model));
+  core::Vector3 sum = core::Vector3::Zero();
+  for (const auto& [parent, leaf] : toes) sum += rest.X_W[leaf].p - rest.X_W[parent].p;
+  sum.y() = 0;
+  const core::Vector3 now = data.X_W[1].R * (rest.X_W[1].R.transpose() * sum);
+  const core::Vector3 horizontal(now.x(), 0.0, now.z());
+  if (!(horizontal.norm() >= 0.5 * now.norm())) return std::nullopt;
+  return horizontal.normalized();
+}
+
+std::optional<Facing> facing_of(const core::Model& model, const core::Data& data) {
+  if (model.njoints < 2) return std::nullopt;
+  Facing out;
+  out.links = left_right_pairs(model);
+  if (!out.links.empty()) {
+    const auto direction = facing_from_sides(data, out.links);
+    if (!direction) return std::nullopt;
+    out.direction = *direction;
+    return out;
+  }
+  out.links = toe_links(model);
+  const auto direction = facing_from_toes(model, data, out.links);
+  if (!direction) return std::nullopt;
+  out.direction = *direction;
+  out.by_toes = true;
+  return out;
+}
+
 Faced face_forward(const std::shared_ptr<const core::Model>& model, const Eigen::VectorXd& q) {
   Faced out{model, 0.0, false};
   if (model->njoints < 2) return out;
   core::Data data(*model);
   core::forward_kinematics(*model, data, q);
-  const auto facing = facing_direction(data, left_right_pairs(*model));
+  const auto facing = facing_of(*model, data);
   if (!facing) return out;
   out.known = true;
   // facing (sin φ, 0, cos φ) turns onto +Z by −φ about +Y
-  const double turn = -std::atan2(facing->x(), facing->z());
+  const double turn = -std::atan2(facing->direction.x(), facing->direction.z());
   if (std::abs(turn) <= 1e-9) return out;
   out.model = core::turn_root_about_vertical(*model, turn, data.X_W[1].p);
   out.turn = turn;

@@ -6,7 +6,8 @@
 // ("L"/"R", "Left"/"Right", any case: "leg_joint_L_1", "Bip01 R Thigh", "hip.L",
 // "left_hip_pitch_link"), taking each limb's first pair below the root (hips, shoulders, a
 // quadruped's four legs). The figure faces left × up, the direction in which its chest and toes
-// point when its left is where the names say.
+// point when its left is where the names say. A rig whose names tell no sides (glTF bones named
+// "nodes[N]") faces where its toes point in its rest pose.
 #pragma once
 
 #include <Eigen/Dense>
@@ -36,8 +37,33 @@ std::optional<std::pair<std::string, bool>> mirrored_name(const std::string& nam
 /// kinematics): left × up, with left the sum of the pairs' (left − right) world offsets.
 /// std::nullopt when there are no pairs, or when that sum is within 30° of vertical (a figure
 /// lying on its side faces no horizontal direction).
-std::optional<core::Vector3> facing_direction(const core::Data& data,
-                                              const std::vector<std::pair<int, int>>& pairs);
+std::optional<core::Vector3> facing_from_sides(const core::Data& data,
+                                               const std::vector<std::pair<int, int>>& pairs);
+
+/// Which way a figure faces and what told it.
+struct Facing {
+  core::Vector3 direction;                 // horizontal, unit length
+  std::vector<std::pair<int, int>> links;  // the (left, right) pairs, or (foot, toe) when by_toes
+  bool by_toes = false;                    // read from the toes: the names tell no sides
+};
+
+/// The toes of a figure whose names tell no sides, found by shape in its rest pose: (parent, leaf)
+/// for each leaf link in the lowest 15 % of the links' heights, below the root, whose bone from
+/// its parent leans at least 15° from vertical (a toe or a foot pointing forward). Empty when
+/// there are none, or when they do not point the same way horizontally.
+std::vector<std::pair<int, int>> toe_links(const core::Model& model);
+
+/// Where the toes point in the rest pose, carried into the pose of `data` by the root's rotation
+/// (horizontal, unit length); std::nullopt without toes, or when that is within 30° of vertical.
+std::optional<core::Vector3> facing_from_toes(const core::Model& model,
+                                              const core::Data& data,
+                                              const std::vector<std::pair<int, int>>& toes);
+
+/// The direction the figure faces in the pose of `data` (after forward kinematics): from its
+/// left and right (facing_from_sides) when its names tell them, else from where its toes point in
+/// the rest pose, carried into this pose by the root's rotation. std::nullopt when neither tells,
+/// or the direction is within 30° of vertical.
+std::optional<Facing> facing_of(const core::Model& model, const core::Data& data);
 
 /// A figure turned to face +Z.
 struct Faced {

@@ -18,18 +18,19 @@ namespace cli {
 
 namespace {
 
-// which way the figure faces in pose `q` and the left/right links that tell it (the page turns it
-// to face +Z when it opens: animator/facing.hpp); null when its names tell no sides
+// which way the figure faces in pose `q` and the links that tell it (the page turns it to face
+// +Z when it opens: animator/facing.hpp); null when nothing tells
 nlohmann::json facing_summary(const core::Model& m, const Eigen::VectorXd& q) {
-  const auto pairs = animator::left_right_pairs(m);
   core::Data data(m);
   core::forward_kinematics(m, data, q);
-  const auto facing = animator::facing_direction(data, pairs);
+  const auto facing = animator::facing_of(m, data);
   if (!facing) return nullptr;
   nlohmann::json from = nlohmann::json::array();
-  for (const auto& [l, r] : pairs) from.push_back({m.link_name[l], m.link_name[r]});
-  return {{"direction", {facing->x(), 0.0, facing->z()}},
-          {"degrees_from_plus_z", std::atan2(facing->x(), facing->z()) * 180 / std::numbers::pi},
+  for (const auto& [a, b] : facing->links) from.push_back({m.link_name[a], m.link_name[b]});
+  const core::Vector3& d = facing->direction;
+  return {{"direction", {d.x(), 0.0, d.z()}},
+          {"degrees_from_plus_z", std::atan2(d.x(), d.z()) * 180 / std::numbers::pi},
+          {"by", facing->by_toes ? "toes" : "left and right"},
           {"from", from}};
 }
 

@@ -1,11 +1,15 @@
 // Tests for animator/facing.hpp: which way a figure faces, read from the left and right links its
-// names tell, and face_forward turning an opened figure (and its clip) to face +Z in place. The
-// checks use what the estimate does not: where the toes point and which side the left hand is on.
+// names tell (else from where its toes point), and face_forward turning an opened figure (and its
+// clip) to face +Z in place. The checks use what each reading does not: where the toes point,
+// which side the left hand is on, the other reading.
 #include "animator/facing.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <iostream>
 #include <numbers>
 
 #include "core/configuration.hpp"
@@ -13,6 +17,7 @@
 #include "core/kinematics.hpp"
 #include "core/model_builder.hpp"
 #include "core/model_edit.hpp"
+#include "io/bvh.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {
@@ -58,7 +63,7 @@ TEST(FacingDirection, TheBundledFigureFacesPlusZAndTurnsBackWhenTurned) {
   core::forward_kinematics(*m, d, q);
   const auto pairs = animator::left_right_pairs(*m);
   ASSERT_EQ(pairs.size(), 2u);  // hips and shoulders
-  const auto facing = animator::facing_direction(d, pairs);
+  const auto facing = animator::facing_from_sides(d, pairs);
   ASSERT_TRUE(facing);
   EXPECT_LT((*facing - Vector3::UnitZ()).norm(), 1e-9);
   EXPECT_GT(toes_direction(*m, d).z(), 0.99);
@@ -180,6 +185,100 @@ TEST(FacingDirection, AFigureLyingOnItsSideOrWithoutSidesKeepsItsPlacement) {
   const animator::Faced unknown = face_forward(stick, core::rest_configuration(*stick));
   EXPECT_FALSE(unknown.known);
   EXPECT_EQ(unknown.model, stick);
+}
+
+// the bundled figure with its links named n1, n2, ... (a glTF whose bones have no names)
+std::shared_ptr<const core::Model> nameless_figure() {
+  const auto m = core::build_human_figure({});
+  core::ModelBuilder b = core::to_builder(*m);
+  for (int i = 1; i < m->njoints; ++i) {
+    core::LinkSpec& l = b.link(i - 1);
+    l.name = "n" + std::to_string(i);
+    l.joint.name = "j" + std::to_string(i);
+    l.display_name.clear();
+    if (m->parent[i] > 0) l.parent = "n" + std::to_string(m->parent[i]);
+  }
+  return b.finalize();
+}
+
+TEST(FacingFromToes, ANamelessFigureFacesWhereItsToesPoint) {
+  const auto m = nameless_figure();
+  EXPECT_TRUE(animator::left_right_pairs(*m).empty());
+  const auto toes = animator::toe_links(*m);
+  ASSERT_EQ(toes.size(), 2u);
+  const auto built = core::build_human_figure({});
+  for (const auto& [foot, toe] : toes) {
+    const std::string name = built->link_name[toe];
+    EXPECT_TRUE(name == "l_toes" || name == "r_toes") << name;
+    EXPECT_EQ(built->link_name[foot], name.substr(0, 2) + "foot");
+  }
+  // the first frame yawed 60° and leaning forward 20°: turned back by -60°
+  Eigen::VectorXd q = core::rest_configuration(*m);
+  const core::Quaternion pose(Eigen::AngleAxisd(std::numbers::pi / 3, Vector3::UnitY()) *
+                              Eigen::AngleAxisd(std::numbers::pi / 9, Vector3::UnitX()));
+  core::set_quaternion_at(q, m->idx_q[1] + 3, pose);
+  const animator::Faced f = face_forward(m, q);
+  ASSERT_TRUE(f.known);
+  EXPECT_NEAR(f.turn, -std::numbers::pi / 3, 1e-9);
+  core::Data d(*f.model);
+  core::forward_kinematics(*f.model, d, q);
+  const auto facing = animator::facing_of(*f.model, d);
+  ASSERT_TRUE(facing);
+  EXPECT_TRUE(facing->by_toes);
+  EXPECT_LT((facing->direction - Vector3::UnitZ()).norm(), 1e-9);
+  // the left hip (the bundled figure's l_thigh) at +X
+  const int l_thigh = built->link_index("l_thigh"), r_thigh = built->link_index("r_thigh");
+  EXPECT_GT(d.X_W[l_thigh].p.x() - d.X_W[r_thigh].p.x(), 0.1);
+  EXPECT_NEAR(d.X_W[l_thigh].p.z(), d.X_W[r_thigh].p.z(), 1e-9);
+}
+
+TEST(FacingFromToes, FeetWithoutToesOrPointingApartTellNothing) {
+  // a figure whose lowest leaves hang straight down from their parents
+  core::ModelBuilder b("plumb");
+  core::LinkSpec body = fixtures::box_link("body", "", 10, Vector3(0.2, 0.3, 0.1));
+  body.joint.type = core::JointType::kFree;
+  body.joint.X_PJ = core::Transform::from_translation(Vector3(0, 1, 0));
+  b.add_link(body);
+  for (const double x : {-0.1, 0.1}) {
+    const std::string leg = x < 0 ? "a" : "b";
+    core::LinkSpec upper = fixtures::box_link(leg, "body", 2, Vector3(0.05, 0.3, 0.05));
+    upper.joint.type = core::JointType::kSpherical;
+    upper.joint.X_PJ = core::Transform::from_translation(Vector3(x, -0.2, 0));
+    b.add_link(upper);
+    core::LinkSpec end = fixtures::box_link(leg + "_end", leg, 1, Vector3(0.05, 0.05, 0.05));
+    end.joint.X_PJ = core::Transform::from_translation(Vector3(0, -0.7, 0));
+    b.add_link(end);
+  }
+  const auto plumb = b.finalize();
+  EXPECT_TRUE(animator::toe_links(*plumb).empty());
+  EXPECT_FALSE(face_forward(plumb, core::rest_configuration(*plumb)).known);
+  // feet splayed apart, one +X and one -X: no agreement, no direction
+  core::ModelBuilder splayed = core::to_builder(*plumb);
+  splayed.link(2).joint.X_PJ = core::Transform::from_translation(Vector3(-0.3, -0.7, 0));
+  splayed.link(4).joint.X_PJ = core::Transform::from_translation(Vector3(0.3, -0.7, 0));
+  EXPECT_TRUE(animator::toe_links(*splayed.finalize()).empty());
+}
+
+// Where both readings exist on the shared captures, the names' left and right and the toes found
+// by shape agree (measured: within 3.4°, where the clips start)
+TEST(FacingFromToes, AgreesWithTheSidesOnTheSharedCaptures) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  int compared = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(fixtures::data_dir() + "/bvh")) {
+    const io::BvhImport imported = io::load_bvh_file(entry.path().string());
+    const core::Model& m = *imported.model;
+    core::Data d(m);
+    core::forward_kinematics(m, d, imported.clip.frames.front());
+    const auto sides = animator::facing_from_sides(d, animator::left_right_pairs(m));
+    const auto toes = animator::facing_from_toes(m, d, animator::toe_links(m));
+    if (!sides || !toes) continue;
+    const double degrees =
+        std::acos(std::clamp(sides->dot(*toes), -1.0, 1.0)) * 180 / std::numbers::pi;
+    std::cout << entry.path().filename().string() << ": sides and toes " << degrees << "° apart\n";
+    EXPECT_LT(degrees, 10.0) << entry.path();
+    ++compared;
+  }
+  EXPECT_GE(compared, 5);
 }
 
 }  // namespace

@@ -204,6 +204,7 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
   // which way it faces where the clip starts, and from which links (the page turns it to +Z)
   EXPECT_LT(std::abs(j.at("facing").at("degrees_from_plus_z").get<double>()), 5.0);
   EXPECT_EQ(j.at("facing").at("from")[0], json({"LeftUpLeg", "RightUpLeg"}));
+  EXPECT_EQ(j.at("facing").at("by"), "left and right");
   const Outcome boxing = pindrag(dir, "info " + fixtures::data_dir() + "/bvh/boxing_toes_zxy.bvh");
   ASSERT_EQ(boxing.status, 0) << boxing.err;
   EXPECT_GT(std::abs(json::parse(boxing.out).at("facing").at("degrees_from_plus_z").get<double>()),
@@ -214,7 +215,9 @@ TEST(InfoCommand, ClipFilesReportFramesTimingAndJoints) {
   const json k = json::parse(g.out);
   EXPECT_GT(k.at("clip").at("frames").get<int>(), 1);
   EXPECT_GT(k.at("clip").at("skin").at("vertices").get<int>(), 0);
-  EXPECT_TRUE(k.at("facing").is_null());  // its bones are named nodes[N]: no sides
+  // its bones are named nodes[N]: its toes tell it faces +X
+  EXPECT_EQ(k.at("facing").at("by"), "toes");
+  EXPECT_NEAR(k.at("facing").at("degrees_from_plus_z").get<double>(), 90.0, 5.0);
   // a bundled character still prints its summary, without a clip
   const Outcome h = pindrag(dir, "info human48");
   ASSERT_EQ(h.status, 0) << h.err;

@@ -1,7 +1,7 @@
 // A character opened in the page (server/uploads.hpp session_from_file) faces +Z where its clip
-// starts. The turn is read from the figure's left and right hips and shoulders; these tests check
-// it with what that reading does not use: where the toes point, and, for a capture made to face
-// +X, which side its left leg ends up on.
+// starts. The turn is read from the figure's left and right hips and shoulders (else its toes);
+// these tests check it with what that reading does not use: where the toes point, which side a
+// left leg ends up on, where the knees are.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -112,6 +112,22 @@ TEST(OpenedPlacement, EverySharedFigureWithToesOpensWithThemPointingPlusZ) {
   // the captures with named feet and toes: boxing (facing -Z in its file), both CMU walks, the
   // CMU jumps, Mixamo, PFNN
   EXPECT_GE(checked, 6);
+}
+
+// CesiumMan's bones are named nodes[N]: its toes tell which way it faces (+X in its file). It
+// opens facing +Z, as its knees say: ahead of its hips in its rest pose.
+TEST(OpenedPlacement, ANamelessRigOpensFacingWhereItsToesPoint) {
+  PINDRAG_REQUIRE_DATA_DIR();
+  const auto s = server::session_from_file(fixtures::data_dir() + "/gltf/CesiumMan.glb", "cesium");
+  const core::Model& m = s->model();
+  core::Data d(m);
+  core::forward_kinematics(m, d, core::rest_configuration(m));
+  // hips nodes[3] and nodes[7], knees nodes[4] and nodes[8]
+  const auto at = [&](const char* name) { return d.X_W[m.link_index(name)].p; };
+  const Vector3 knees_ahead = at("nodes[4]") + at("nodes[8]") - at("nodes[3]") - at("nodes[7]");
+  const double degrees = std::atan2(knees_ahead.x(), knees_ahead.z()) * 180 / std::numbers::pi;
+  EXPECT_LT(std::abs(degrees), 20.0) << knees_ahead.transpose();
+  EXPECT_GT(knees_ahead.z(), 0.05);
 }
 
 }  // namespace
