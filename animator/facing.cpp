@@ -184,6 +184,45 @@ std::optional<Facing> facing_of(const core::Model& model, const core::Data& data
   return out;
 }
 
+std::optional<core::Vector3> rest_up(const core::Model& model) {
+  const BodyPartGuess parts = guess_body_parts(model);
+  const int hips = parts.link[static_cast<int>(BodyPart::kHips)];
+  if (hips < 0) return std::nullopt;
+  for (BodyPart top : {BodyPart::kHead, BodyPart::kNeck, BodyPart::kChest}) {
+    const int link = parts.link[static_cast<int>(top)];
+    if (link < 0 || link == hips) continue;
+    core::Data rest(model);
+    core::forward_kinematics(model, rest, core::rest_configuration(model));
+    const core::Vector3 up = rest.X_W[link].p - rest.X_W[hips].p;
+    if (up.norm() > 0) return up.normalized();
+  }
+  return std::nullopt;
+}
+
+std::shared_ptr<const core::Model> stand_upright(const std::shared_ptr<const core::Model>& model) {
+  if (model->njoints < 2) return model;
+  const auto up = rest_up(*model);
+  const double cos45 = std::sqrt(0.5);
+  if (!up || up->y() >= cos45) return model;
+  // the axis it is within 45° of, and the quarter or half turn taking that axis to +Y
+  int axis = 0;
+  up->cwiseAbs().maxCoeff(&axis);
+  if (std::abs((*up)[axis]) < cos45) return model;
+  const double sign = (*up)[axis] > 0 ? 1.0 : -1.0;
+  const double quarter = std::numbers::pi / 2;
+  core::Matrix3 R;
+  if (axis == 2) {  // ±Z → +Y: about X by ∓90°
+    R = Eigen::AngleAxisd(-sign * quarter, core::Vector3::UnitX()).toRotationMatrix();
+  } else if (axis == 0) {  // ±X → +Y: about Z by ±90°
+    R = Eigen::AngleAxisd(sign * quarter, core::Vector3::UnitZ()).toRotationMatrix();
+  } else {  // −Y → +Y: a half turn about X
+    R = Eigen::AngleAxisd(2 * quarter, core::Vector3::UnitX()).toRotationMatrix();
+  }
+  core::Data rest(*model);
+  core::forward_kinematics(*model, rest, core::rest_configuration(*model));
+  return core::turn_root(*model, R, rest.X_W[1].p);
+}
+
 Faced face_forward(const std::shared_ptr<const core::Model>& model, const Eigen::VectorXd& q) {
   Faced out{model, 0.0, false};
   if (model->njoints < 2) return out;
@@ -195,7 +234,9 @@ Faced face_forward(const std::shared_ptr<const core::Model>& model, const Eigen:
   // facing (sin φ, 0, cos φ) turns onto +Z by −φ about +Y
   const double turn = -std::atan2(facing->direction.x(), facing->direction.z());
   if (std::abs(turn) <= 1e-9) return out;
-  out.model = core::turn_root_about_vertical(*model, turn, data.X_W[1].p);
+  const core::Matrix3 about_vertical =
+      Eigen::AngleAxisd(turn, core::Vector3::UnitY()).toRotationMatrix();
+  out.model = core::turn_root(*model, about_vertical, data.X_W[1].p);
   out.turn = turn;
   return out;
 }

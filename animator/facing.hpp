@@ -1,5 +1,5 @@
-// Which way a figure faces, and turning an opened figure to face +Z, pindrag's convention (world
-// Y up, a character faces +Z with its left towards +X).
+// Which way a figure faces and which way is its up, and turning an opened figure upright and to
+// face +Z, pindrag's convention (world Y up, a character faces +Z with its left towards +X).
 //
 // A figure's left is read from its names: the left and right hips and shoulders of a humanoid
 // convention (animator/joint_names.hpp), else any links whose names differ only in a side word
@@ -64,6 +64,17 @@ std::optional<core::Vector3> facing_from_toes(const core::Model& model,
 /// the rest pose, carried into this pose by the root's rotation. std::nullopt when neither tells,
 /// or the direction is within 30° of vertical.
 std::optional<Facing> facing_of(const core::Model& model, const core::Data& data);
+
+/// The figure's up in its rest pose, by name: from its hips to its head (else its neck, else its
+/// chest) as a humanoid convention names them; std::nullopt when they are not named or coincide.
+std::optional<core::Vector3> rest_up(const core::Model& model);
+
+/// Stands a figure authored with another up axis upright. When its rest pose's up (rest_up) is
+/// more than 45° from +Y and within 45° of ±X, −Y or ±Z (a capture exported Z up lies on its
+/// back), the root's placement turns by the quarter or half turn that takes that axis to +Y, about
+/// the root's origin in the rest pose; else `model` itself is returned. The rest pose tells the
+/// file's convention: a clip that starts lying on the floor keeps its first frame.
+std::shared_ptr<const core::Model> stand_upright(const std::shared_ptr<const core::Model>& model);
 
 /// A figure turned to face +Z.
 struct Faced {

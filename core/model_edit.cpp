@@ -139,13 +139,12 @@ Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
   return out;
 }
 
-std::shared_ptr<const Model> turn_root_about_vertical(const Model& model,
-                                                      double angle,
-                                                      const Vector3& centre) {
+std::shared_ptr<const Model> turn_root(const Model& model,
+                                       const Matrix3& R,
+                                       const Vector3& centre) {
   ModelBuilder builder = to_builder(model);
   JointSpec& root = builder.link(0).joint;
-  // X_PJ ← T(c) · R_y(angle) · T(−c) · X_PJ
-  const Matrix3 R = Eigen::AngleAxisd(angle, Vector3::UnitY()).toRotationMatrix();
+  // X_PJ ← T(c) · R · T(−c) · X_PJ
   root.X_PJ.R = R * root.X_PJ.R;
   root.X_PJ.p = R * (root.X_PJ.p - centre) + centre;
   return builder.finalize();

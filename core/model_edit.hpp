@@ -49,11 +49,9 @@ Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
                                 const SkinnedMesh* skin);
 inline constexpr double kGroundingVertexFrames = 2e7;
 
-/// `model` with its root joint's placement X_PJ turned by `angle` (radians, right-handed) about
-/// the vertical line (world +Y) through `centre`: the figure, and any motion of it (its joint
-/// coordinates are relative to the placement), turns in place about that line.
-std::shared_ptr<const Model> turn_root_about_vertical(const Model& model,
-                                                      double angle,
-                                                      const Vector3& centre);
+/// `model` with its root joint's placement X_PJ turned by the rotation `R` (world frame) about
+/// the point `centre`: the figure, and any motion of it (its joint coordinates are relative to
+/// the placement), turns in place about that point.
+std::shared_ptr<const Model> turn_root(const Model& model, const Matrix3& R, const Vector3& centre);
 
 }  // namespace core

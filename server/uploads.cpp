@@ -129,11 +129,13 @@ io::BvhImport load_bvh(const std::string& path,
   return io::load_bvh_file(path, options);
 }
 
-// the figure turned to face +Z in the clip's first frame (its rest pose when there is no clip)
-std::shared_ptr<const core::Model> face_forward_at_start(
+// the figure stood upright (a file authored Z up lies on its back) and turned to face +Z in the
+// clip's first frame (its rest pose when there is no clip)
+std::shared_ptr<const core::Model> upright_facing_forward(
     const std::shared_ptr<const core::Model>& model, const std::vector<Eigen::VectorXd>& frames) {
-  return animator::face_forward(model,
-                                frames.empty() ? core::rest_configuration(*model) : frames.front())
+  const std::shared_ptr<const core::Model> upright = animator::stand_upright(model);
+  return animator::face_forward(
+             upright, frames.empty() ? core::rest_configuration(*upright) : frames.front())
       .model;
 }
 
@@ -170,9 +172,9 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   const std::string ext = extension_of(path);
   if (ext == ".bvh") {
     io::BvhImport imported = load_bvh(path, limits, nullptr, bvh_scale);
-    // facing +Z where the clip starts, and the capture's floor where its figure stands: its
-    // lowest point over the clip at y = 0
-    imported.model = face_forward_at_start(imported.model, imported.clip.frames);
+    // upright and facing +Z where the clip starts, and the capture's floor where its figure
+    // stands: its lowest point over the clip at y = 0
+    imported.model = upright_facing_forward(imported.model, imported.clip.frames);
     imported.model =
         core::stand_motion_on_ground(imported.model, imported.clip.frames, nullptr).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
@@ -183,12 +185,12 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
   }
   if (is_assimp_format(ext)) {
     io::SkinnedImport imported = load_skinned(path, limits);
-    // facing +Z where the clip starts, standing on the ground: the lowest point of its mesh (or
-    // links) over the clip at y = 0
+    // upright and facing +Z where the clip starts, standing on the ground: the lowest point of its
+    // mesh (or links) over the clip at y = 0
     static const std::vector<Eigen::VectorXd> kNoFrames;
     const std::vector<Eigen::VectorXd>& frames =
         imported.clips.empty() ? kNoFrames : imported.clips.front().clip.frames;
-    imported.model = face_forward_at_start(imported.model, frames);
+    imported.model = upright_facing_forward(imported.model, frames);
     imported.model = core::stand_motion_on_ground(imported.model, frames, &imported.mesh).model;
     auto session = std::make_unique<animator::Session>(imported.model, name);
     session->set_limits(limits);
@@ -202,10 +204,10 @@ std::unique_ptr<animator::Session> session_from_file(const std::string& path,
     return session;
   }
   std::shared_ptr<const core::Model> model = io::load_model_file(path).model;
-  // a robot description puts its root at the world origin: stand it on the ground (legged ones
-  // on a free root)
+  // a robot description puts its root at the world origin: turn it upright and to face +Z and
+  // stand it on the ground (legged ones on a free root)
   if (ext == ".urdf") {
-    model = animator::face_forward(model, core::rest_configuration(*model)).model;
+    model = upright_facing_forward(model, {});
     model = core::stand_on_ground(model).model;
   }
   auto session = std::make_unique<animator::Session>(std::move(model), name);

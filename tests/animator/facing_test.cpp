@@ -73,8 +73,9 @@ TEST(FacingDirection, TheBundledFigureFacesPlusZAndTurnsBackWhenTurned) {
   EXPECT_EQ(same.model, m);
 
   // turned 110° about a vertical line away from the origin, it turns back in place
-  const auto turned =
-      core::turn_root_about_vertical(*m, 110 * std::numbers::pi / 180, Vector3(2.0, 0.0, -1.0));
+  const core::Matrix3 yaw =
+      Eigen::AngleAxisd(110 * std::numbers::pi / 180, Vector3::UnitY()).toRotationMatrix();
+  const auto turned = core::turn_root(*m, yaw, Vector3(2.0, 0.0, -1.0));
   core::Data dt(*turned);
   core::forward_kinematics(*turned, dt, q);
   EXPECT_LT(toes_direction(*turned, dt).z(), 0.0);
@@ -185,6 +186,40 @@ TEST(FacingDirection, AFigureLyingOnItsSideOrWithoutSidesKeepsItsPlacement) {
   const animator::Faced unknown = face_forward(stick, core::rest_configuration(*stick));
   EXPECT_FALSE(unknown.known);
   EXPECT_EQ(unknown.model, stick);
+}
+
+// Each of the four quarter turns and the half turn that take +Y off the vertical: the figure
+// stands upright again, every link where it was in the rest pose.
+TEST(StandUpright, AFigureAuthoredWithAnotherUpAxisStandsAsItWasBuilt) {
+  const auto m = core::build_human_figure({});
+  const Eigen::VectorXd q = core::rest_configuration(*m);
+  core::Data built(*m);
+  core::forward_kinematics(*m, built, q);
+  const Vector3 root = built.X_W[1].p;
+  ASSERT_TRUE(animator::rest_up(*m));
+  EXPECT_GT(animator::rest_up(*m)->y(), 0.99);
+  EXPECT_EQ(animator::stand_upright(m), m);
+  const double quarter = std::numbers::pi / 2;
+  const std::pair<double, Vector3> turns[] = {{quarter, Vector3::UnitX()},
+                                              {-quarter, Vector3::UnitX()},
+                                              {quarter, Vector3::UnitZ()},
+                                              {-quarter, Vector3::UnitZ()},
+                                              {2 * quarter, Vector3::UnitX()}};
+  for (const auto& [angle, axis] : turns) {
+    const auto lying = core::turn_root(*m, Eigen::AngleAxisd(angle, axis).toRotationMatrix(), root);
+    EXPECT_LT(animator::rest_up(*lying)->y(), 1e-9) << angle << " about " << axis.transpose();
+    const auto upright = animator::stand_upright(lying);
+    core::Data d(*upright);
+    core::forward_kinematics(*upright, d, q);
+    for (int i = 1; i < m->njoints; ++i) {
+      EXPECT_LT((d.X_W[i].p - built.X_W[i].p).norm(), 1e-12)
+          << m->link_name[i] << ", " << angle << " about " << axis.transpose();
+    }
+  }
+  // leaning 30° is a pose, not an axis convention: kept
+  const auto leaning = core::turn_root(
+      *m, Eigen::AngleAxisd(std::numbers::pi / 6, Vector3::UnitX()).toRotationMatrix(), root);
+  EXPECT_EQ(animator::stand_upright(leaning), leaning);
 }
 
 // the bundled figure with its links named n1, n2, ... (a glTF whose bones have no names)

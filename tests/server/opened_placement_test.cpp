@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 
 #include "animator/joint_names.hpp"
@@ -39,6 +40,14 @@ double toes_angle_from_plus_z(const core::Model& m, const Eigen::VectorXd& q) {
   const Vector3 v = d.X_W[link(BodyPart::kLeftToes)].p - d.X_W[link(BodyPart::kLeftFoot)].p +
                     d.X_W[link(BodyPart::kRightToes)].p - d.X_W[link(BodyPart::kRightFoot)].p;
   return std::atan2(v.x(), v.z()) * 180 / std::numbers::pi;
+}
+
+// the world position of a link by name, and a capture's left hip from its right
+Vector3 link_at(const core::Model& m, const core::Data& d, const char* name) {
+  return d.X_W[m.link_index(name)].p;
+}
+Vector3 hips_left(const core::Model& m, const core::Data& d) {
+  return link_at(m, d, "LeftUpLeg") - link_at(m, d, "RightUpLeg");
 }
 
 TEST(OpenedPlacement, ACaptureFacingPlusXOpensFacingPlusZ) {
@@ -78,12 +87,12 @@ TEST(OpenedPlacement, ACaptureFacingPlusXOpensFacingPlusZ) {
   double hip_width = 0;
   for (const Eigen::VectorXd& q : s->clip()->frames) {
     core::forward_kinematics(m, d, q);
-    const Vector3 left = d.X_W[m.link_index("LeftUpLeg")].p - d.X_W[m.link_index("RightUpLeg")].p;
+    const Vector3 left = hips_left(m, d);
     EXPECT_GT(left.x(), 0.0);
     EXPECT_NEAR(left.y(), 0.0, 1e-12);
     EXPECT_NEAR(left.z(), 0.0, 1e-12);
     EXPECT_NEAR(toes_angle_from_plus_z(m, q), 0.0, 1e-6);
-    hips.push_back(d.X_W[m.link_index("Hips")].p);
+    hips.push_back(link_at(m, d, "Hips"));
     hip_width = left.norm();
   }
   EXPECT_NEAR(hips[2].z() - hips[0].z(), 4 * hip_width, 1e-9);
@@ -112,6 +121,54 @@ TEST(OpenedPlacement, EverySharedFigureWithToesOpensWithThemPointingPlusZ) {
   // the captures with named feet and toes: boxing (facing -Z in its file), both CMU walks, the
   // CMU jumps, Mixamo, PFNN
   EXPECT_GE(checked, 6);
+}
+
+// A capture exported Z up, facing -Y (as Blender's axes are): it opens standing on its feet on
+// the ground, facing +Z, walking along +Z.
+TEST(OpenedPlacement, ACaptureAuthoredZUpOpensStandingUpright) {
+  std::string bvh =
+      "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n"
+      " CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n";
+  const char* rot = "CHANNELS 3 Zrotation Xrotation Yrotation\n";
+  for (const std::string side : {"Left", "Right"}) {
+    bvh += " JOINT " + side + "UpLeg\n {\n  OFFSET " + (side == "Left" ? "10" : "-10") +
+           " 0 0\n  " + rot + "  JOINT " + side + "Leg\n  {\n   OFFSET 0 0 -45\n   " + rot +
+           "   JOINT " + side + "Foot\n   {\n    OFFSET 0 0 -40\n    " + rot + "    JOINT " + side +
+           "ToeBase\n    {\n     OFFSET 0 -12 -5\n     " + rot +
+           "     End Site\n     {\n      OFFSET 0 -5 0\n     }\n    }\n   }\n  }\n }\n";
+  }
+  bvh += " JOINT Spine\n {\n  OFFSET 0 0 10\n  " + std::string(rot) +
+         "  JOINT Head\n  {\n   OFFSET 0 0 50\n   " + rot +
+         "   End Site\n   {\n    OFFSET 0 0 10\n   }\n  }\n }\n}\n";
+  bvh += "MOTION\nFrames: 2\nFrame Time: 0.033333\n";
+  for (int f = 0; f < 2; ++f) {
+    bvh += "0 " + std::to_string(-40 * f) + " 90 0 0 0";
+    for (int k = 0; k < 10 * 3; ++k) bvh += " 0";
+    bvh += "\n";
+  }
+  const std::filesystem::path path = std::filesystem::path(::testing::TempDir()) / "z_up.bvh";
+  std::ofstream(path) << bvh;
+  const auto s = server::session_from_file(path.string(), "z up");
+  const core::Model& m = s->model();
+  core::Data d(m);
+  std::vector<Vector3> hips;
+  for (const Eigen::VectorXd& q : s->clip()->frames) {
+    core::forward_kinematics(m, d, q);
+    const Vector3 up = link_at(m, d, "Head") - link_at(m, d, "Hips");
+    EXPECT_GT(up.y(), 0.0);
+    EXPECT_NEAR(up.x(), 0.0, 1e-9);
+    EXPECT_NEAR(up.z(), 0.0, 1e-9);
+    EXPECT_GT(hips_left(m, d).x(), 0.0);
+    EXPECT_NEAR(toes_angle_from_plus_z(m, q), 0.0, 1e-6);
+    double lowest = core::kInfinity;
+    for (int i = 1; i < m.njoints; ++i) lowest = std::min(lowest, d.X_W[i].p.y());
+    EXPECT_GE(lowest, 0.0);  // the lowest origin above the floor by less than a capsule
+    EXPECT_LT(lowest, 0.1 * up.norm());
+    hips.push_back(link_at(m, d, "Hips"));
+  }
+  EXPECT_GT(hips[1].z() - hips[0].z(), 0.0);
+  EXPECT_NEAR(hips[1].x() - hips[0].x(), 0.0, 1e-9);
+  EXPECT_NEAR(hips[1].y() - hips[0].y(), 0.0, 1e-9);
 }
 
 // CesiumMan's bones are named nodes[N]: its toes tell which way it faces (+X in its file). It
