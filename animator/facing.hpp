@@ -80,7 +80,7 @@ std::shared_ptr<const core::Model> stand_upright(const std::shared_ptr<const cor
 struct Faced {
   std::shared_ptr<const core::Model> model;
   double turn = 0;     // radians the figure turned about the vertical (right-handed about +Y)
-  bool known = false;  // its names told which way it faced
+  bool known = false;  // its names or its toes told which way it faced
 };
 
 /// Turns `model` about the vertical line through its root's origin in configuration `q` so that it
