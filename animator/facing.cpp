@@ -186,15 +186,23 @@ std::optional<Facing> facing_of(const core::Model& model, const core::Data& data
 
 std::optional<core::Vector3> rest_up(const core::Model& model) {
   const BodyPartGuess parts = guess_body_parts(model);
-  const int hips = parts.link[static_cast<int>(BodyPart::kHips)];
-  if (hips < 0) return std::nullopt;
+  const auto link = [&](BodyPart p) { return parts.link[static_cast<int>(p)]; };
+  const int hips = link(BodyPart::kHips);
+  const int left_foot = link(BodyPart::kLeftFoot), right_foot = link(BodyPart::kRightFoot);
+  if (hips < 0 || left_foot < 0 || right_foot < 0) return std::nullopt;
+  core::Data rest(model);
+  core::forward_kinematics(model, rest, core::rest_configuration(model));
+  const core::Vector3 feet = 0.5 * (rest.X_W[left_foot].p + rest.X_W[right_foot].p);
+  const core::Vector3 standing = rest.X_W[hips].p - feet;  // from the feet up to the hips
   for (BodyPart top : {BodyPart::kHead, BodyPart::kNeck, BodyPart::kChest}) {
-    const int link = parts.link[static_cast<int>(top)];
-    if (link < 0 || link == hips) continue;
-    core::Data rest(model);
-    core::forward_kinematics(model, rest, core::rest_configuration(model));
-    const core::Vector3 up = rest.X_W[link].p - rest.X_W[hips].p;
-    if (up.norm() > 0) return up.normalized();
+    const int t = link(top);
+    if (t < 0 || t == hips) continue;
+    const core::Vector3 spine = rest.X_W[t].p - rest.X_W[hips].p;  // from the hips up
+    if (!(spine.norm() > 0) || !(standing.norm() > 0)) return std::nullopt;
+    // a biped's legs and spine make one line; a four-legged figure's spine is level over its legs
+    const core::Vector3 a = spine.normalized(), b = standing.normalized();
+    if (!(a.dot(b) >= std::sqrt(0.5))) return std::nullopt;
+    return (a + b).normalized();
   }
   return std::nullopt;
 }

@@ -65,8 +65,10 @@ std::optional<core::Vector3> facing_from_toes(const core::Model& model,
 /// or the direction is within 30° of vertical.
 std::optional<Facing> facing_of(const core::Model& model, const core::Data& data);
 
-/// The figure's up in its rest pose, by name: from its hips to its head (else its neck, else its
-/// chest) as a humanoid convention names them; std::nullopt when they are not named or coincide.
+/// The figure's up in its rest pose, by name: the mean direction from its feet to its hips and
+/// from its hips to its head (else its neck, else its chest) as a humanoid convention names them.
+/// std::nullopt when they are not named, or when the two directions are more than 45° apart (a
+/// four-legged figure, its spine level over its legs, has no such up).
 std::optional<core::Vector3> rest_up(const core::Model& model);
 
 /// Stands a figure authored with another up axis upright. When its rest pose's up (rest_up) is

@@ -34,6 +34,25 @@ Vector3 toes_direction(const core::Model& m, const core::Data& d) {
   return v.normalized();
 }
 
+// a box link on a free root joint placed `height` up
+core::LinkSpec free_root(const std::string& name, double mass, const Vector3& half, double height) {
+  core::LinkSpec l = fixtures::box_link(name, "", mass, half);
+  l.joint.type = core::JointType::kFree;
+  l.joint.X_PJ = core::Transform::from_translation(Vector3(0, height, 0));
+  return l;
+}
+
+// a small box link hung from `parent` at `offset` on a joint of `type`
+core::LinkSpec hung(const std::string& name,
+                    const std::string& parent,
+                    core::JointType type,
+                    const Vector3& offset) {
+  core::LinkSpec l = fixtures::box_link(name, parent, 1, Vector3(0.05, 0.05, 0.05));
+  l.joint.type = type;
+  l.joint.X_PJ = core::Transform::from_translation(offset);
+  return l;
+}
+
 TEST(MirroredName, SwapsTheSideWordInItsOwnCase) {
   const auto expect = [](const char* name, const char* mirrored, bool left) {
     const auto m = mirrored_name(name);
@@ -122,22 +141,15 @@ TEST(FacingDirection, AClipTurnsWithItsFirstFrame) {
 // a four-legged figure named by side words, facing +X: its left legs at -Z
 std::shared_ptr<const core::Model> quadruped() {
   core::ModelBuilder b("quadruped");
-  core::LinkSpec body = fixtures::box_link("body", "", 20, Vector3(0.8, 0.3, 0.3));
-  body.joint.type = core::JointType::kFree;
-  b.add_link(body);
+  b.add_link(free_root("body", 20, Vector3(0.8, 0.3, 0.3), 0.0));
   for (const char* side : {"L", "R"}) {
     for (const char* end : {"front", "back"}) {
       const std::string leg = std::string("leg_") + side + "_" + end;
-      core::LinkSpec upper = fixtures::box_link(leg, "body", 2, Vector3(0.05, 0.3, 0.05));
-      upper.joint.type = core::JointType::kSpherical;
       const double x = std::string(end) == "front" ? 0.35 : -0.35;
       const double z = std::string(side) == "L" ? -0.12 : 0.12;
-      upper.joint.X_PJ = core::Transform::from_translation(Vector3(x, -0.1, z));
-      b.add_link(upper);
+      b.add_link(hung(leg, "body", core::JointType::kSpherical, Vector3(x, -0.1, z)));
       // the foot is a pair too, splayed outwards: only each limb's first pair counts
-      core::LinkSpec foot = fixtures::box_link(leg + "_foot", leg, 1, Vector3(0.05, 0.05, 0.05));
-      foot.joint.X_PJ = core::Transform::from_translation(Vector3(0.3, -0.3, 2 * z));
-      b.add_link(foot);
+      b.add_link(hung(leg + "_foot", leg, core::JointType::kFixed, Vector3(0.3, -0.3, 2 * z)));
     }
   }
   return b.finalize();
@@ -178,10 +190,8 @@ TEST(FacingDirection, AFigureLyingOnItsSideOrWithoutSidesKeepsItsPlacement) {
   EXPECT_EQ(lying.model, m);
   // nothing named by side
   core::ModelBuilder b("stick");
-  core::LinkSpec base = fixtures::box_link("base", "", 1, Vector3(0.1, 0.1, 0.1));
-  base.joint.type = core::JointType::kFree;
-  b.add_link(base);
-  b.add_link(fixtures::box_link("tip", "base", 1, Vector3(0.1, 0.1, 0.1)));
+  b.add_link(free_root("base", 1, Vector3(0.1, 0.1, 0.1), 0.0));
+  b.add_link(hung("tip", "base", core::JointType::kFixed, Vector3(0, 0.2, 0)));
   const auto stick = b.finalize();
   const animator::Faced unknown = face_forward(stick, core::rest_configuration(*stick));
   EXPECT_FALSE(unknown.known);
@@ -207,7 +217,11 @@ TEST(StandUpright, AFigureAuthoredWithAnotherUpAxisStandsAsItWasBuilt) {
                                               {2 * quarter, Vector3::UnitX()}};
   for (const auto& [angle, axis] : turns) {
     const auto lying = core::turn_root(*m, Eigen::AngleAxisd(angle, axis).toRotationMatrix(), root);
-    EXPECT_LT(animator::rest_up(*lying)->y(), 1e-9) << angle << " about " << axis.transpose();
+    // its up (feet to hips to head) now along another axis, to within the few degrees its feet
+    // stand off the line of its spine
+    const core::Matrix3 R = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+    EXPECT_GT(animator::rest_up(*lying)->dot(R * Vector3::UnitY()), 0.99)
+        << angle << " about " << axis.transpose();
     const auto upright = animator::stand_upright(lying);
     core::Data d(*upright);
     core::forward_kinematics(*upright, d, q);
@@ -220,6 +234,28 @@ TEST(StandUpright, AFigureAuthoredWithAnotherUpAxisStandsAsItWasBuilt) {
   const auto leaning = core::turn_root(
       *m, Eigen::AngleAxisd(std::numbers::pi / 6, Vector3::UnitX()).toRotationMatrix(), root);
   EXPECT_EQ(animator::stand_upright(leaning), leaning);
+}
+
+// A four-legged figure named like a biped (Hips, Head, LeftFoot, ...), its spine level and its
+// legs under it: its hips-to-head is horizontal, but it is not lying down
+TEST(StandUpright, AFourLeggedFigureNamedLikeABipedIsNotStoodOnItsHindLegs) {
+  core::ModelBuilder b("dog");
+  b.add_link(free_root("Hips", 10, Vector3(0.1, 0.1, 0.1), 0.5));
+  b.add_link(hung("Spine", "Hips", core::JointType::kSpherical, Vector3(0, 0, 0.3)));
+  b.add_link(hung("Head", "Spine", core::JointType::kSpherical, Vector3(0, 0.1, 0.3)));
+  for (const std::string side : {"Left", "Right"}) {
+    const double x = side == "Left" ? 0.1 : -0.1;
+    b.add_link(hung(side + "UpLeg", "Hips", core::JointType::kSpherical, Vector3(x, 0, 0)));
+    b.add_link(hung(side + "Foot", side + "UpLeg", core::JointType::kFixed, Vector3(0, -0.45, 0)));
+  }
+  const auto dog = b.finalize();
+  EXPECT_FALSE(animator::rest_up(*dog));
+  EXPECT_EQ(animator::stand_upright(dog), dog);
+  // the same figure exported Z up is not guessed at either: it keeps its file's axes
+  const auto z_up = core::turn_root(
+      *dog, Eigen::AngleAxisd(std::numbers::pi / 2, Vector3::UnitX()).toRotationMatrix(),
+      Vector3::Zero());
+  EXPECT_EQ(animator::stand_upright(z_up), z_up);
 }
 
 // the bundled figure with its links named n1, n2, ... (a glTF whose bones have no names)
@@ -270,19 +306,11 @@ TEST(FacingFromToes, ANamelessFigureFacesWhereItsToesPoint) {
 TEST(FacingFromToes, FeetWithoutToesOrPointingApartTellNothing) {
   // a figure whose lowest leaves hang straight down from their parents
   core::ModelBuilder b("plumb");
-  core::LinkSpec body = fixtures::box_link("body", "", 10, Vector3(0.2, 0.3, 0.1));
-  body.joint.type = core::JointType::kFree;
-  body.joint.X_PJ = core::Transform::from_translation(Vector3(0, 1, 0));
-  b.add_link(body);
+  b.add_link(free_root("body", 10, Vector3(0.2, 0.3, 0.1), 1.0));
   for (const double x : {-0.1, 0.1}) {
     const std::string leg = x < 0 ? "a" : "b";
-    core::LinkSpec upper = fixtures::box_link(leg, "body", 2, Vector3(0.05, 0.3, 0.05));
-    upper.joint.type = core::JointType::kSpherical;
-    upper.joint.X_PJ = core::Transform::from_translation(Vector3(x, -0.2, 0));
-    b.add_link(upper);
-    core::LinkSpec end = fixtures::box_link(leg + "_end", leg, 1, Vector3(0.05, 0.05, 0.05));
-    end.joint.X_PJ = core::Transform::from_translation(Vector3(0, -0.7, 0));
-    b.add_link(end);
+    b.add_link(hung(leg, "body", core::JointType::kSpherical, Vector3(x, -0.2, 0)));
+    b.add_link(hung(leg + "_end", leg, core::JointType::kFixed, Vector3(0, -0.7, 0)));
   }
   const auto plumb = b.finalize();
   EXPECT_TRUE(animator::toe_links(*plumb).empty());
