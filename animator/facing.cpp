@@ -45,6 +45,18 @@ std::string opposite_in_case(const std::string& word, const std::string& opposit
   return out;
 }
 
+// A four-legged robot's leg code: fore/hind and side in either order ("FL", "RR" as front-left,
+// rear-right; "LF", "RH" as left-fore, right-hind). The index of the side letter in `word`, or
+// -1 when it is not such a code.
+int leg_code_side(const std::string& word) {
+  if (word.size() != 2) return -1;
+  const std::string w = lowered(word);
+  const auto is_side = [](char c) { return c == 'l' || c == 'r'; };
+  if (is_side(w[0]) && (w[1] == 'f' || w[1] == 'h')) return 0;
+  if ((w[0] == 'f' || w[0] == 'h' || w[0] == 'r') && is_side(w[1])) return 1;
+  return -1;
+}
+
 bool is_ancestor(const core::Model& model, int ancestor, int link) {
   for (int k = model.parent[link]; k > 0; k = model.parent[k]) {
     if (k == ancestor) return true;
@@ -71,6 +83,12 @@ std::optional<std::pair<std::string, bool>> mirrored_name(const std::string& nam
           side.size() == 1 ? (left ? "r" : "l") : (left ? "right" : "left");
       return std::make_pair(name.substr(0, i) + opposite_in_case(word, opposite) + name.substr(end),
                             left);
+    }
+    if (const int k = leg_code_side(word); k >= 0) {
+      const bool left = side[k] == 'l';
+      std::string swapped = word;
+      swapped[k] = opposite_in_case(word.substr(k, 1), left ? "r" : "l")[0];
+      return std::make_pair(name.substr(0, i) + swapped + name.substr(end), left);
     }
     i = end;
   }

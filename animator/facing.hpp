@@ -4,10 +4,10 @@
 // A figure's left is read from its names: the left and right hips and shoulders of a humanoid
 // convention (animator/joint_names.hpp), else any links whose names differ only in a side word
 // ("L"/"R", "Left"/"Right", any case: "leg_joint_L_1", "Bip01 R Thigh", "hip.L",
-// "left_hip_pitch_link"), taking each limb's first pair below the root (hips, shoulders, a
-// quadruped's four legs). The figure faces left × up, the direction in which its chest and toes
-// point when its left is where the names say. A rig whose names tell no sides (glTF bones named
-// "nodes[N]") faces where its toes point in its rest pose.
+// "left_hip_pitch_link"; leg codes "FL_hip", "RH_KFE"), taking each limb's first pair below the
+// root (hips, shoulders, a quadruped's four legs). The figure faces left × up, the direction in
+// which its chest and toes point when its left is where the names say. A rig whose names tell no
+// sides (glTF bones named "nodes[N]") faces where its toes point in its rest pose.
 #pragma once
 
 #include <Eigen/Dense>
@@ -27,8 +27,9 @@ namespace animator {
 /// side words in the names. Empty when the names tell no sides.
 std::vector<std::pair<int, int>> left_right_pairs(const core::Model& model);
 
-/// The name with its side word swapped ("LeftArm" → "RightArm", "leg_L_1" → "leg_R_1") and
-/// whether that word said left; std::nullopt when the name has no side word. Words are split at
+/// The name with its side word swapped ("LeftArm" → "RightArm", "leg_L_1" → "leg_R_1", and in a
+/// four-legged robot's leg code "FL_hip" → "FR_hip", "RR_calf" → "RL_calf", "LH_KFE" → "RH_KFE")
+/// and whether that word said left; std::nullopt when the name has no side word. Words are split at
 /// anything but letters and digits and where lower case turns to upper case ("mixamorig:LeftArm"
 /// reads mixamorig, Left, Arm; "LHip" reads L, Hip).
 std::optional<std::pair<std::string, bool>> mirrored_name(const std::string& name);

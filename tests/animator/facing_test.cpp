@@ -69,8 +69,15 @@ TEST(MirroredName, SwapsTheSideWordInItsOwnCase) {
   expect("LHip", "RHip", true);
   expect("RIGHT_ARM", "LEFT_ARM", false);
   expect("b_LeftLeg01_019", "b_RightLeg01_019", true);
+  // four-legged robots' leg codes: fore/hind then side, or side then fore/hind
+  expect("FL_hip_joint", "FR_hip_joint", true);
+  expect("RR_calf", "RL_calf", false);
+  expect("rl_thigh", "rr_thigh", true);
+  expect("LF_HAA", "RF_HAA", true);
+  expect("RH_KFE", "LH_KFE", false);
   // no side word: a word that only starts with L or R is not one
-  for (const char* name : {"Hips", "Leg", "Lumbar", "Root", "lthigh", "Ribs_2", "LowerBack"}) {
+  for (const char* name :
+       {"Hips", "Leg", "Lumbar", "Root", "lthigh", "Ribs_2", "LowerBack", "FF_x", "LR_2", "LL"}) {
     EXPECT_FALSE(mirrored_name(name)) << name;
   }
 }
@@ -153,6 +160,23 @@ std::shared_ptr<const core::Model> quadruped() {
     }
   }
   return b.finalize();
+}
+
+// a four-legged robot named by leg codes (FL, FR, RL, RR), facing +X: its left legs at -Z
+TEST(FacingDirection, LegCodesTellAFourLeggedRobotsLeft) {
+  core::ModelBuilder b("robot");
+  b.add_link(free_root("trunk", 10, Vector3(0.3, 0.1, 0.1), 0.0));
+  for (const char* leg : {"FL", "FR", "RL", "RR"}) {
+    const double x = leg[0] == 'F' ? 0.2 : -0.2, z = leg[1] == 'L' ? -0.05 : 0.05;
+    const std::string hip = std::string(leg) + "_hip";
+    b.add_link(hung(hip, "trunk", core::JointType::kSpherical, Vector3(x, 0, z)));
+    b.add_link(hung(std::string(leg) + "_foot", hip, core::JointType::kFixed, Vector3(0, -0.3, 0)));
+  }
+  const auto robot = b.finalize();
+  EXPECT_EQ(animator::left_right_pairs(*robot).size(), 2u);
+  const animator::Faced f = face_forward(robot, core::rest_configuration(*robot));
+  ASSERT_TRUE(f.known);
+  EXPECT_NEAR(f.turn, -std::numbers::pi / 2, 1e-9);
 }
 
 TEST(FacingDirection, SideWordsTellAQuadrupedsLeftFromItsFirstPairPerLeg) {
