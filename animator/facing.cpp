@@ -28,11 +28,6 @@ bool word_starts_at(const std::string& s, std::size_t i) {
   return is_digit(a) != is_digit(b);
 }
 
-std::string lowered(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 // `word` → its opposite side in the same letter case ("L" → "R", "Left" → "Right", "left" →
 // "right", "LEFT" → "RIGHT")
 std::string opposite_in_case(const std::string& word, const std::string& opposite) {
@@ -50,7 +45,7 @@ std::string opposite_in_case(const std::string& word, const std::string& opposit
 // -1 when it is not such a code.
 int leg_code_side(const std::string& word) {
   if (word.size() != 2) return -1;
-  const std::string w = lowered(word);
+  const std::string w = normalize_joint_name(word);  // a word: letters and digits, lower-cased
   const auto is_side = [](char c) { return c == 'l' || c == 'r'; };
   if (is_side(w[0]) && (w[1] == 'f' || w[1] == 'h')) return 0;
   if ((w[0] == 'f' || w[0] == 'h' || w[0] == 'r') && is_side(w[1])) return 1;
@@ -76,7 +71,7 @@ std::optional<std::pair<std::string, bool>> mirrored_name(const std::string& nam
     std::size_t end = i + 1;
     while (end < name.size() && is_word_char(name[end]) && !word_starts_at(name, end)) ++end;
     const std::string word = name.substr(i, end - i);
-    const std::string side = lowered(word);
+    const std::string side = normalize_joint_name(word);  // the word in lower case
     if (side == "l" || side == "left" || side == "r" || side == "right") {
       const bool left = side[0] == 'l';
       const std::string opposite =
@@ -251,7 +246,6 @@ std::shared_ptr<const core::Model> stand_upright(const std::shared_ptr<const cor
 
 Faced face_forward(const std::shared_ptr<const core::Model>& model, const Eigen::VectorXd& q) {
   Faced out{model, 0.0, false};
-  if (model->njoints < 2) return out;
   core::Data data(*model);
   core::forward_kinematics(*model, data, q);
   const auto facing = facing_of(*model, data);

@@ -34,7 +34,10 @@ nlohmann::json facing_summary(const core::Model& m, const Eigen::VectorXd& q) {
           {"from", from}};
 }
 
-nlohmann::json character_summary(const core::Model& m, const std::vector<std::string>& warnings) {
+// `pose`: where the facing is read (the rest configuration, or where a clip starts)
+nlohmann::json character_summary(const core::Model& m,
+                                 const std::vector<std::string>& warnings,
+                                 const Eigen::VectorXd& pose) {
   std::map<std::string, int> by_type;
   for (int i = 1; i < m.njoints; ++i) ++by_type[core::to_string(m.joint_type[i])];
   nlohmann::json out;
@@ -47,7 +50,7 @@ nlohmann::json character_summary(const core::Model& m, const std::vector<std::st
   out["height"] = core::neutral_height(m);
   out["root"] = m.link_name[1];
   out["root_joint"] = core::to_string(m.joint_type[1]);
-  out["facing"] = facing_summary(m, core::rest_configuration(m));
+  out["facing"] = facing_summary(m, pose);
   out["warnings"] = warnings;
   return out;
 }
@@ -57,9 +60,9 @@ nlohmann::json character_summary(const core::Model& m, const std::vector<std::st
 nlohmann::json clip_summary(const std::string& path) {
   const ClipFile f = read_clip_file(path);
   const core::Model& m = *f.model;
-  nlohmann::json out = character_summary(m, f.warnings);
-  // where the clip starts, as the page shows it
-  if (f.clip.size() > 0) out["facing"] = facing_summary(m, f.clip.frames.front());
+  // facing where the clip starts, as the page shows it
+  nlohmann::json out = character_summary(
+      m, f.warnings, f.clip.size() > 0 ? f.clip.frames.front() : core::rest_configuration(m));
   int moving = 0;
   for (int i = 1; i < m.njoints; ++i) moving += m.joint_type[i] != core::JointType::kFixed;
   nlohmann::json clip;
@@ -140,7 +143,8 @@ void add_info_command(CLI::App& app) {
             {*file + ": unknown file type '" + ext + "' (rule: " + kReads + ")"});
       } else {
         const io::LoadResult loaded = io::load_character(*file);
-        out = character_summary(*loaded.model, loaded.warnings);
+        out = character_summary(*loaded.model, loaded.warnings,
+                                core::rest_configuration(*loaded.model));
       }
     } catch (const core::ModelError& e) {
       std::cerr << "pindrag info: " << e.what() << "\n";

@@ -53,17 +53,22 @@ std::shared_ptr<const Model> weld_root(const std::shared_ptr<const Model>& model
 
 namespace {
 
-// `model` with its root joint's placement raised by `lift` (m, down when negative); its root
-// joint becomes free when `float_root`
-std::shared_ptr<const Model> raise_root(const Model& model, double lift, bool float_root) {
+// `model` with its root joint's placement moved by the world-frame transform G (X_PJ ← G · X_PJ);
+// its root joint becomes free when `float_root`
+std::shared_ptr<const Model> move_root(const Model& model, const Transform& G, bool float_root) {
   ModelBuilder builder = to_builder(model);
   JointSpec& root = builder.link(0).joint;
-  root.X_PJ.p.y() += lift;
+  root.X_PJ = G * root.X_PJ;
   if (float_root) {
     root.type = JointType::kFree;
     root.limits = JointLimits{};
   }
   return builder.finalize();
+}
+
+// `model` with its root joint's placement raised by `lift` (m, down when negative)
+std::shared_ptr<const Model> raise_root(const Model& model, double lift, bool float_root) {
+  return move_root(model, Transform::from_translation(Vector3(0, lift, 0)), float_root);
 }
 
 }  // namespace
@@ -142,12 +147,11 @@ Grounded stand_motion_on_ground(const std::shared_ptr<const Model>& model,
 std::shared_ptr<const Model> turn_root(const Model& model,
                                        const Matrix3& R,
                                        const Vector3& centre) {
-  ModelBuilder builder = to_builder(model);
-  JointSpec& root = builder.link(0).joint;
-  // X_PJ ← T(c) · R · T(−c) · X_PJ
-  root.X_PJ.R = R * root.X_PJ.R;
-  root.X_PJ.p = R * (root.X_PJ.p - centre) + centre;
-  return builder.finalize();
+  // G = T(c) · R · T(−c)
+  Transform G;
+  G.R = R;
+  G.p = centre - R * centre;
+  return move_root(model, G, false);
 }
 
 }  // namespace core
