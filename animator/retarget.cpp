@@ -51,6 +51,8 @@ constexpr double kPinProgress = 1e-4;
 // rad of bone direction a radian of extra twist of the link above a hinge costs: only breaks ties
 // (a straight limb), so the twist the source gives stays
 constexpr double kHingeTwistCost = 1e-2;
+// rad of range excess a radian of swivel of a limb must remove to be taken
+constexpr double kSwivelCost = 0.5;
 
 [[noreturn]] void refuse(const std::string& message) { throw std::invalid_argument(message); }
 
@@ -331,6 +333,7 @@ class PoseMapper {
       const auto [phi, theta] = hinge_twist(g);
       R_desired_[g.parent] = R_desired_[g.parent] * Eigen::AngleAxisd(phi, g.parent_bone);
       hinge_angle_[g.link] = theta;
+      swivel_into_range(g);
     }
     for (int t = 1; t < T_.njoints; ++t) {
       const int p = T_.parent[t], s = c_.source_of_target[t];
@@ -439,6 +442,56 @@ class PoseMapper {
     const double phi = 0.5 * (lo + hi);
     if (evaluate(phi, theta) < best) best_phi = phi, best_theta = theta;
     return {best_phi, best_theta};
+  }
+
+  // A limb whose end joint (ankle, wrist) would leave its range with the end's orientation as the
+  // source has it turns as a whole about the line from its root joint (hip, shoulder) to its end
+  // joint: the swivel of hip–knee–ankle. The end stays where it is and keeps its orientation, the
+  // knee or elbow points a little aside, and the turn the end's joint lacks moves into the root
+  // joint: a foot turned out further than the ankle allows (as a source's 3-DOF knee, twisting,
+  // leaves it) turns the hip out instead. The swivel minimizes the two joints' range excess plus
+  // kSwivelCost per radian turned. (The root joint's rotation is taken from the desired
+  // orientation of the link above; where that link hangs on a hinge, as an upper arm on a
+  // clavicle does, the solver corrects the difference.)
+  void swivel_into_range(const Hinge& g) {
+    const int end = g.below, root_parent = T_.parent[g.parent];
+    if (T_.parent[end] != g.link || T_.joint_type[end] != core::JointType::kSpherical ||
+        T_.spherical_range[end].empty() || root_parent < 1) {
+      return;
+    }
+    const Matrix3 R_upper = R_desired_[g.parent];
+    const Matrix3 R_lower =
+        R_upper * T_.X_PJ[g.link].R * Eigen::AngleAxisd(hinge_angle_[g.link], T_.axis[g.link]);
+    const Vector3 limb = R_upper * T_.X_PJ[g.link].p + R_lower * T_.X_PJ[end].p;
+    if (limb.norm() < kMinBoneLength) return;
+    const Vector3 axis = limb.normalized();
+    const Matrix3 R_root_base = R_desired_[root_parent] * T_.X_PJ[g.parent].R;
+    const bool root_ranged = T_.joint_type[g.parent] == core::JointType::kSpherical &&
+                             !T_.spherical_range[g.parent].empty();
+    auto excess = [&](double psi) {
+      const Matrix3 turn = Eigen::AngleAxisd(psi, axis).toRotationMatrix();
+      const Matrix3 R_end = (turn * R_lower * T_.X_PJ[end].R).transpose() * R_desired_[end];
+      double v = core::joint_range_status(T_, end, Quaternion(R_end).normalized()).violation;
+      if (root_ranged) {
+        const Matrix3 R_root = R_root_base.transpose() * turn * R_upper;
+        v += core::joint_range_status(T_, g.parent, Quaternion(R_root).normalized()).violation;
+      }
+      return v;
+    };
+    double best_psi = 0, best_cost = excess(0);
+    if (best_cost == 0) return;
+    // a grid of 2-degree steps over a quarter turn either way: a limb turns only as far as that
+    // removes range excess, and a turn that removes little is not taken
+    constexpr int kSteps = 45;
+    for (int k = 1; k <= kSteps; ++k) {
+      for (const int sign : {1, -1}) {
+        const double psi = sign * 0.5 * std::numbers::pi * k / kSteps;
+        const double cost = excess(psi) + kSwivelCost * std::abs(psi);
+        if (cost < best_cost) best_cost = cost, best_psi = psi;
+      }
+    }
+    if (best_psi == 0) return;
+    R_desired_[g.parent] = Eigen::AngleAxisd(best_psi, axis) * R_upper;
   }
 
   const core::Model& T_;
