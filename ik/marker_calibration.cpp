@@ -246,16 +246,19 @@ CalibrationResult calibrate_markers(std::shared_ptr<const core::Model> model,
   // first poses: a sequential fit through the whole range, so each starts near its answer
   std::vector<Eigen::VectorXd> poses = initial_poses(*model, set, t, frames, fit);
   CalibrationResult r;
-  for (int round = 0; round < settings.rounds; ++round) {
+  // each round fits the poses, then re-estimates offsets and scales; the last fit is with the
+  // final offsets and scales
+  for (int round = 0;; ++round) {
     OffsetSums sums{std::vector<core::Vector3>(set.size(), core::Vector3::Zero()),
                     std::vector<int>(set.size(), 0)};
-    r.rms_per_round.push_back(fit_poses(c, t, frames, poses, 2 * fit.max_iterations, sums));
+    const double rms = fit_poses(c, t, frames, poses, 2 * fit.max_iterations, sums);
+    // converged: the round before barely lowered the RMS (a round that raised it goes on)
+    const double gain = r.rms_per_round.empty() ? rms : r.rms_per_round.back() - rms;
+    r.rms_per_round.push_back(rms);
+    if ((gain >= 0 && gain <= settings.rms_tolerance * rms) || round >= settings.max_rounds) break;
     update_offsets(set, settings, sums, c.fitter);
     if (settings.estimate_scales) update_scales(c, t, frames, poses, settings);
   }
-  OffsetSums unused{std::vector<core::Vector3>(set.size(), core::Vector3::Zero()),
-                    std::vector<int>(set.size(), 0)};
-  r.rms_per_round.push_back(fit_poses(c, t, frames, poses, 2 * fit.max_iterations, unused));
   r.model = scale_joint_placements(*model, c.scales);
   r.set = c.fitter.marker_set();
   r.scales = c.scales;

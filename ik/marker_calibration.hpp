@@ -26,7 +26,11 @@ struct CalibrationSettings {
   int last_frame = -1;  // -1: one second from the first frame at or after first_frame that has
                         // enough markers (at least one frame)
   int max_frames = 40;  // frames of the range used (evenly spaced)
-  int rounds = 12;      // alternations of (a), (b) and (c)
+  // Alternations of (a), (b) and (c): until a round lowers the calibration frames' marker RMS by
+  // less than rms_tolerance of itself, at most max_rounds. The alternation creeps along the
+  // directions in which a link's offsets and its pose turn together, so it takes tens of rounds.
+  int max_rounds = 100;
+  double rms_tolerance = 1e-3;
   double offset_prior = 2.0;           // λ for given offsets, in frames
   bool estimate_given_offsets = true;  // false: only offsets left out of the marker set move
   bool estimate_scales = true;
