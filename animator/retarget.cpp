@@ -454,9 +454,10 @@ class PoseMapper {
   // orientation of the link above; where that link hangs on a hinge, as an upper arm on a
   // clavicle does, the solver corrects the difference.)
   void swivel_into_range(const Hinge& g) {
+    // the hinge's parent (the limb's root joint) is a ball joint below the free root, and the
+    // end hangs on the hinge (see the constructor)
     const int end = g.below, root_parent = T_.parent[g.parent];
-    if (T_.parent[end] != g.link || T_.joint_type[end] != core::JointType::kSpherical ||
-        T_.spherical_range[end].empty() || root_parent < 1) {
+    if (T_.joint_type[end] != core::JointType::kSpherical || T_.spherical_range[end].empty()) {
       return;
     }
     const Matrix3 R_upper = R_desired_[g.parent];
@@ -466,8 +467,7 @@ class PoseMapper {
     if (limb.norm() < kMinBoneLength) return;
     const Vector3 axis = limb.normalized();
     const Matrix3 R_root_base = R_desired_[root_parent] * T_.X_PJ[g.parent].R;
-    const bool root_ranged = T_.joint_type[g.parent] == core::JointType::kSpherical &&
-                             !T_.spherical_range[g.parent].empty();
+    const bool root_ranged = !T_.spherical_range[g.parent].empty();
     auto excess = [&](double psi) {
       const Matrix3 turn = Eigen::AngleAxisd(psi, axis).toRotationMatrix();
       const Matrix3 R_end = (turn * R_lower * T_.X_PJ[end].R).transpose() * R_desired_[end];
