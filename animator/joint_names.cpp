@@ -66,6 +66,45 @@ const Convention kConventions[] = {
       "rclavicle|rcl", "rhumerus|rhu", "rradius|rra", "rhand|rhn",
       "lfemur|lfe", "ltibia|lti", "lfoot|lfo", "ltoes|ltoe|lto",
       "rfemur|rfe", "rtibia|rti", "rfoot|rfo", "rtoes|rtoe|rto"}},
+    // Unreal Engine's mannequins: spine_01 ... spine_03 (UE4) or spine_05 (UE5), the clavicles
+    // hanging from the last
+    {"unreal", "",
+     {"pelvis", "spine01", "spine05|spine03|spine02", "neck01", "head",
+      "claviclel", "upperarml", "lowerarml", "handl",
+      "clavicler", "upperarmr", "lowerarmr", "handr",
+      "thighl", "calfl", "footl", "balll",
+      "thighr", "calfr", "footr", "ballr"}},
+    // Blender's human metarig and the deform bones Rigify generates from it ("DEF-thigh.L"):
+    // "spine" is the hips, spine.003 carries the shoulders, spine.006 is the head
+    {"rigify", "",
+     {"spine|defspine", "spine001|defspine001", "spine003|defspine003", "spine004|defspine004",
+      "spine006|defspine006",
+      "shoulderl|defshoulderl", "upperarml|defupperarml", "forearml|defforearml", "handl|defhandl",
+      "shoulderr|defshoulderr", "upperarmr|defupperarmr", "forearmr|defforearmr", "handr|defhandr",
+      "thighl|defthighl", "shinl|defshinl", "footl|deffootl", "toel|deftoel",
+      "thighr|defthighr", "shinr|defshinr", "footr|deffootr", "toer|deftoer"}},
+    // Unity's and VRM's humanoid bones, by their names or VRoid's ("J_Bip_L_UpperArm");
+    // LeftShoulder is the clavicle, as in Mixamo
+    {"vrm", "",
+     {"hips|jbipchips", "spine|jbipcspine", "upperchest|chest|jbipcupperchest|jbipcchest",
+      "neck|jbipcneck", "head|jbipchead",
+      "leftshoulder|jbiplshoulder", "leftupperarm|jbiplupperarm", "leftlowerarm|jbipllowerarm",
+      "lefthand|jbiplhand",
+      "rightshoulder|jbiprshoulder", "rightupperarm|jbiprupperarm", "rightlowerarm|jbiprlowerarm",
+      "righthand|jbiprhand",
+      "leftupperleg|jbiplupperleg", "leftlowerleg|jbipllowerleg", "leftfoot|jbiplfoot",
+      "lefttoes|jbipltoebase",
+      "rightupperleg|jbiprupperleg", "rightlowerleg|jbiprlowerleg", "rightfoot|jbiprfoot",
+      "righttoes|jbiprtoebase"}},
+    // SMPL's joints (body models and the captures fitted with them, AMASS), long or short
+    // ("left_hip", "L_Hip"): the joint names where a part rotates, so the "ankle" is the foot,
+    // the "foot" the toes, the "collar" the clavicle and the "shoulder" the upper arm
+    {"smpl", "",
+     {"pelvis", "spine1", "spine3|spine2", "neck", "head",
+      "leftcollar|lcollar", "leftshoulder|lshoulder", "leftelbow|lelbow", "leftwrist|lwrist",
+      "rightcollar|rcollar", "rightshoulder|rshoulder", "rightelbow|relbow", "rightwrist|rwrist",
+      "lefthip|lhip", "leftknee|lknee", "leftankle|lankle", "leftfoot|lfoot",
+      "righthip|rhip", "rightknee|rknee", "rightankle|rankle", "rightfoot|rfoot"}},
 };
 
 const char* const kPartNames[kBodyPartCount] = {

@@ -78,6 +78,47 @@ TEST(JointNames, BipedPlugInGaitMixamoAndTheBundledFigures) {
   }
 }
 
+// Where these conventions part from the ones above: a name that means another part, or a part
+// with several candidates
+TEST(JointNames, UnrealRigifyVrmAndSmplNameTheirOwnParts) {
+  // UE5's mannequin: five spine links, the clavicles on spine_05 (UE4's stop at spine_03)
+  const auto ue5 =
+      named_skeleton({"pelvis", "spine_01", "spine_02", "spine_03", "spine_04", "spine_05",
+                      "clavicle_l", "upperarm_l", "thigh_l", "calf_l", "foot_l", "ball_l"});
+  const auto gu = animator::guess_body_parts(*ue5);
+  EXPECT_EQ(gu.convention, "unreal");
+  EXPECT_EQ(ue5->link_name[part(gu, BodyPart::kChest)], "spine_05");
+  EXPECT_EQ(ue5->link_name[part(gu, BodyPart::kLeftToes)], "ball_l");
+  // Blender's metarig: "spine" is the hips, "spine.001" the spine
+  const auto meta = named_skeleton({"spine", "spine.001", "spine.002", "spine.003", "spine.004",
+                                    "spine.005", "spine.006", "thigh.L", "shin.L", "foot.L"});
+  const auto gm = animator::guess_body_parts(*meta);
+  EXPECT_EQ(gm.convention, "rigify");
+  EXPECT_EQ(meta->link_name[part(gm, BodyPart::kHips)], "spine");
+  EXPECT_EQ(meta->link_name[part(gm, BodyPart::kSpine)], "spine.001");
+  EXPECT_EQ(meta->link_name[part(gm, BodyPart::kHead)], "spine.006");
+  // Unity's humanoid names: UpperChest over Chest, LeftShoulder the clavicle
+  const auto unity =
+      named_skeleton({"Hips", "Spine", "Chest", "UpperChest", "LeftShoulder", "LeftUpperArm",
+                      "LeftLowerArm", "LeftUpperLeg", "LeftLowerLeg", "LeftFoot", "LeftToes"});
+  const auto gv = animator::guess_body_parts(*unity);
+  EXPECT_EQ(gv.convention, "vrm");
+  EXPECT_EQ(unity->link_name[part(gv, BodyPart::kChest)], "UpperChest");
+  EXPECT_EQ(unity->link_name[part(gv, BodyPart::kLeftClavicle)], "LeftShoulder");
+  EXPECT_EQ(unity->link_name[part(gv, BodyPart::kLeftShin)], "LeftLowerLeg");
+  // SMPL's short names: the ankle is the foot, the foot the toes, the shoulder the upper arm
+  const auto smpl = named_skeleton({"Pelvis", "L_Hip", "L_Knee", "L_Ankle", "L_Foot", "Spine1",
+                                    "Spine2", "Spine3", "Neck", "Head", "L_Collar", "L_Shoulder",
+                                    "L_Elbow", "L_Wrist", "L_Hand"});
+  const auto gs = animator::guess_body_parts(*smpl);
+  EXPECT_EQ(gs.convention, "smpl");
+  EXPECT_EQ(smpl->link_name[part(gs, BodyPart::kLeftFoot)], "L_Ankle");
+  EXPECT_EQ(smpl->link_name[part(gs, BodyPart::kLeftToes)], "L_Foot");
+  EXPECT_EQ(smpl->link_name[part(gs, BodyPart::kLeftUpperArm)], "L_Shoulder");
+  EXPECT_EQ(smpl->link_name[part(gs, BodyPart::kLeftHand)], "L_Wrist");
+  EXPECT_EQ(smpl->link_name[part(gs, BodyPart::kChest)], "Spine3");
+}
+
 TEST(JointNames, MappingOverridesGuessesAndNamesBadEntries) {
   const auto src = named_skeleton({"Hips", "LowerBack", "Spine", "LeftShoulder", "LeftArm",
                                    "LeftForeArm", "LeftHand", "LeftUpLeg", "LeftLeg"});
