@@ -51,6 +51,8 @@ const Naming kNamings[] = {
 };
 // clang-format on
 
+void PrintTo(const Naming& naming, std::ostream* os) { *os << naming.convention; }
+
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
   std::stringstream s;
