@@ -96,6 +96,23 @@ const Convention kConventions[] = {
       "lefttoes|jbipltoebase",
       "rightupperleg|jbiprupperleg", "rightlowerleg|jbiprlowerleg", "rightfoot|jbiprfoot",
       "righttoes|jbiprtoebase"}},
+    // Daz Genesis: 3 and 8 split limbs into Bend and Twist links (the Bend one plays the part),
+    // 1 and 2 do not; "hip" is the root and "pelvis" below it only carries the thighs
+    {"daz", "",
+     {"hip", "abdomenlower|abdomen", "chestupper|chestlower|chest", "necklower|neck", "head",
+      "lcollar", "lshldrbend|lshldr", "lforearmbend|lforearm", "lhand",
+      "rcollar", "rshldrbend|rshldr", "rforearmbend|rforearm", "rhand",
+      "lthighbend|lthigh", "lshin", "lfoot", "ltoe",
+      "rthighbend|rthigh", "rshin", "rfoot", "rtoe"}},
+    // Reallusion Character Creator ("CC_Base_L_Thigh"): Hip above Pelvis (the thighs) and Waist
+    // (the spine), the clavicles on Spine02
+    {"charactercreator", "",
+     {"ccbasehip", "ccbasewaist", "ccbasespine02|ccbasespine01", "ccbasenecktwist01|ccbaseneck",
+      "ccbasehead",
+      "ccbaselclavicle", "ccbaselupperarm", "ccbaselforearm", "ccbaselhand",
+      "ccbaserclavicle", "ccbaserupperarm", "ccbaserforearm", "ccbaserhand",
+      "ccbaselthigh", "ccbaselcalf", "ccbaselfoot", "ccbaseltoebase",
+      "ccbaserthigh", "ccbasercalf", "ccbaserfoot", "ccbasertoebase"}},
     // SMPL's joints (body models and the captures fitted with them, AMASS), long or short
     // ("left_hip", "L_Hip"): the joint names where a part rotates, so the "ankle" is the foot,
     // the "foot" the toes, the "collar" the clavicle and the "shoulder" the upper arm

@@ -80,7 +80,7 @@ TEST(JointNames, BipedPlugInGaitMixamoAndTheBundledFigures) {
 
 // Where these conventions part from the ones above: a name that means another part, or a part
 // with several candidates
-TEST(JointNames, UnrealRigifyVrmAndSmplNameTheirOwnParts) {
+TEST(JointNames, UnrealRigifyVrmDazAndSmplNameTheirOwnParts) {
   // UE5's mannequin: five spine links, the clavicles on spine_05 (UE4's stop at spine_03)
   const auto ue5 =
       named_skeleton({"pelvis", "spine_01", "spine_02", "spine_03", "spine_04", "spine_05",
@@ -106,6 +106,16 @@ TEST(JointNames, UnrealRigifyVrmAndSmplNameTheirOwnParts) {
   EXPECT_EQ(unity->link_name[part(gv, BodyPart::kChest)], "UpperChest");
   EXPECT_EQ(unity->link_name[part(gv, BodyPart::kLeftClavicle)], "LeftShoulder");
   EXPECT_EQ(unity->link_name[part(gv, BodyPart::kLeftShin)], "LeftLowerLeg");
+  // Daz Genesis 2 (no Bend links): the biped-like lThigh and lHand do not make it a Biped, and
+  // the root "hip" is the hips, not the "pelvis" below it
+  const auto g2 =
+      named_skeleton({"hip", "pelvis", "lThigh", "lShin", "lFoot", "lToe", "abdomen", "abdomen2",
+                      "chest", "neck", "head", "lCollar", "lShldr", "lForeArm", "lHand"});
+  const auto gd = animator::guess_body_parts(*g2);
+  EXPECT_EQ(gd.convention, "daz");
+  EXPECT_EQ(g2->link_name[part(gd, BodyPart::kHips)], "hip");
+  EXPECT_EQ(g2->link_name[part(gd, BodyPart::kLeftUpperArm)], "lShldr");
+  EXPECT_EQ(g2->link_name[part(gd, BodyPart::kChest)], "chest");
   // SMPL's short names: the ankle is the foot, the foot the toes, the shoulder the upper arm
   const auto smpl = named_skeleton({"Pelvis", "L_Hip", "L_Knee", "L_Ankle", "L_Foot", "Spine1",
                                     "Spine2", "Spine3", "Neck", "Head", "L_Collar", "L_Shoulder",

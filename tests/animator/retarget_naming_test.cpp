@@ -1,6 +1,7 @@
 // Naming conventions beyond the capture files' own: the CMU walk with its joints renamed the way
-// Unreal Engine, Blender/Rigify, VRoid and SMPL skeletons name them is recognised part for part
-// and retargets onto human48 exactly as the original does (animator/joint_names.hpp).
+// Unreal Engine, Blender/Rigify, VRoid, Daz, Character Creator and SMPL skeletons name them is
+// recognised part for part and retargets onto human48 exactly as the original does
+// (animator/joint_names.hpp).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -42,6 +43,17 @@ const Naming kNamings[] = {
       "J_Bip_R_Shoulder", "J_Bip_R_UpperArm", "J_Bip_R_LowerArm", "J_Bip_R_Hand",
       "J_Bip_L_UpperLeg", "J_Bip_L_LowerLeg", "J_Bip_L_Foot", "J_Bip_L_ToeBase",
       "J_Bip_R_UpperLeg", "J_Bip_R_LowerLeg", "J_Bip_R_Foot", "J_Bip_R_ToeBase"}},
+    {"daz",
+     {"hip", "abdomenLower", "chestUpper", "neckLower", "head",
+      "lCollar", "lShldrBend", "lForearmBend", "lHand",
+      "rCollar", "rShldrBend", "rForearmBend", "rHand",
+      "lThighBend", "lShin", "lFoot", "lToe", "rThighBend", "rShin", "rFoot", "rToe"}},
+    {"charactercreator",
+     {"CC_Base_Hip", "CC_Base_Waist", "CC_Base_Spine02", "CC_Base_NeckTwist01", "CC_Base_Head",
+      "CC_Base_L_Clavicle", "CC_Base_L_Upperarm", "CC_Base_L_Forearm", "CC_Base_L_Hand",
+      "CC_Base_R_Clavicle", "CC_Base_R_Upperarm", "CC_Base_R_Forearm", "CC_Base_R_Hand",
+      "CC_Base_L_Thigh", "CC_Base_L_Calf", "CC_Base_L_Foot", "CC_Base_L_ToeBase",
+      "CC_Base_R_Thigh", "CC_Base_R_Calf", "CC_Base_R_Foot", "CC_Base_R_ToeBase"}},
     {"smpl",
      {"pelvis", "spine1", "spine3", "neck", "head",
       "left_collar", "left_shoulder", "left_elbow", "left_wrist",
