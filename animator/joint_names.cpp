@@ -75,10 +75,11 @@ const Convention kConventions[] = {
       "thighl", "calfl", "footl", "balll",
       "thighr", "calfr", "footr", "ballr"}},
     // Blender's human metarig and the deform bones Rigify generates from it ("DEF-thigh.L"):
-    // "spine" is the hips, spine.003 carries the shoulders, spine.006 is the head
+    // "spine" is the hips, spine.003 carries the shoulders, spine.006 is the head. Blender's
+    // older metarig named them hips, spine, chest, neck and head.
     {"rigify", "",
-     {"spine|defspine", "spine001|defspine001", "spine003|defspine003", "spine004|defspine004",
-      "spine006|defspine006",
+     {"hips|spine|defspine", "spine001|defspine001|spine", "spine003|defspine003|chest",
+      "spine004|defspine004|neck", "spine006|defspine006|head",
       "shoulderl|defshoulderl", "upperarml|defupperarml", "forearml|defforearml", "handl|defhandl",
       "shoulderr|defshoulderr", "upperarmr|defupperarmr", "forearmr|defforearmr", "handr|defhandr",
       "thighl|defthighl", "shinl|defshinl", "footl|deffootl", "toel|deftoel",

@@ -97,6 +97,14 @@ TEST(JointNames, UnrealRigifyVrmDazAndSmplNameTheirOwnParts) {
   EXPECT_EQ(meta->link_name[part(gm, BodyPart::kHips)], "spine");
   EXPECT_EQ(meta->link_name[part(gm, BodyPart::kSpine)], "spine.001");
   EXPECT_EQ(meta->link_name[part(gm, BodyPart::kHead)], "spine.006");
+  // ... and Blender's older metarig named its spine hips, spine, chest, neck, head
+  const auto old_meta = named_skeleton({"hips", "spine", "chest", "neck", "head", "thigh.L",
+                                        "shin.L", "foot.L", "upper_arm.L", "forearm.L"});
+  const auto go = animator::guess_body_parts(*old_meta);
+  EXPECT_EQ(go.convention, "rigify");
+  EXPECT_EQ(old_meta->link_name[part(go, BodyPart::kHips)], "hips");
+  EXPECT_EQ(old_meta->link_name[part(go, BodyPart::kSpine)], "spine");
+  EXPECT_EQ(old_meta->link_name[part(go, BodyPart::kChest)], "chest");
   // Unity's humanoid names: UpperChest over Chest, LeftShoulder the clavicle
   const auto unity =
       named_skeleton({"Hips", "Spine", "Chest", "UpperChest", "LeftShoulder", "LeftUpperArm",
