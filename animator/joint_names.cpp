@@ -190,6 +190,15 @@ std::string normalize_joint_name(std::string_view name) {
     const std::string b(biped);
     if (out.size() > b.size() && out.rfind(b, 0) == 0) return out.substr(b.size());
   }
+  // a namespace whose ':' was lost ("mixamorig_Hips", or "mixamorigHips" from tools that drop
+  // the character), and Maya HumanIK's default "Character1_" prefix: a word, optional digits
+  for (const auto& [word, needs_digits] : {std::pair{"mixamorig", false}, {"character", true}}) {
+    const std::string w(word);
+    if (out.rfind(w, 0) != 0) continue;
+    std::size_t end = w.size();
+    while (end < out.size() && std::isdigit(static_cast<unsigned char>(out[end]))) ++end;
+    if ((!needs_digits || end > w.size()) && end < out.size()) return out.substr(end);
+  }
   return out;
 }
 

@@ -3,11 +3,12 @@
 //
 // Each convention lists, for every body part, the names a skeleton of that convention gives it,
 // in order of preference. Names are compared normalized: the part before the last ':' dropped
-// ("mixamorig:LeftArm", "Male:LFWT"), a leading "Bip01"/"Bip001" dropped, letters lowercased and
-// everything but letters and digits removed, so "Bip01 L UpperArm" reads "lupperarm". A skeleton
-// gets the convention that recognises the most of its joints: the same name can mean different
-// parts in two conventions ("LeftShoulder" is the clavicle in CMU's MotionBuilder release and
-// Mixamo, the upper arm in CMU's 3ds Max release and Biovision files).
+// ("mixamorig:LeftArm", "Male:LFWT"), a leading "Bip01"/"Bip001", "mixamorig" (its ':' lost:
+// "mixamorig_Hips") or "Character1" (Maya HumanIK's default prefix) dropped, letters lowercased
+// and everything but letters and digits removed, so "Bip01 L UpperArm" reads "lupperarm". A
+// skeleton gets the convention that recognises the most of its joints: the same name can mean
+// different parts in two conventions ("LeftShoulder" is the clavicle in CMU's MotionBuilder release
+// and Mixamo, the upper arm in CMU's 3ds Max release and Biovision files).
 #pragma once
 
 #include <array>

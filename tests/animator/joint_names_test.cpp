@@ -30,12 +30,18 @@ std::shared_ptr<const core::Model> named_skeleton(const std::vector<std::string>
 
 int part(const animator::BodyPartGuess& g, BodyPart p) { return g.link[static_cast<int>(p)]; }
 
-TEST(JointNames, NormalizeDropsNamespacesBipedPrefixAndSeparators) {
+TEST(JointNames, NormalizeDropsNamespacesPrefixesAndSeparators) {
   EXPECT_EQ(animator::normalize_joint_name("mixamorig:LeftArm"), "leftarm");
   EXPECT_EQ(animator::normalize_joint_name("Bip01 L UpperArm"), "lupperarm");
   EXPECT_EQ(animator::normalize_joint_name("Bip001 R Calf"), "rcalf");
   EXPECT_EQ(animator::normalize_joint_name("l_uarm"), "luarm");
   EXPECT_EQ(animator::normalize_joint_name("Bip01"), "bip01");
+  EXPECT_EQ(animator::normalize_joint_name("mixamorig_Hips"), "hips");
+  EXPECT_EQ(animator::normalize_joint_name("mixamorigLeftUpLeg"), "leftupleg");
+  EXPECT_EQ(animator::normalize_joint_name("mixamorig1_Spine2"), "spine2");
+  EXPECT_EQ(animator::normalize_joint_name("Character1_LeftUpLeg"), "leftupleg");
+  EXPECT_EQ(animator::normalize_joint_name("Character1"), "character1");
+  EXPECT_EQ(animator::normalize_joint_name("CharacterRoot"), "characterroot");
 }
 
 TEST(JointNames, LeftShoulderMeansWhatItsConventionSays) {

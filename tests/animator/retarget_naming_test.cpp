@@ -1,5 +1,6 @@
 // Naming conventions beyond the capture files' own: the CMU walk with its joints renamed the way
-// Unreal Engine, Blender/Rigify, VRoid, Daz, Character Creator and SMPL skeletons name them is
+// Maya HumanIK (its Character1_ prefix), Mixamo (its namespace's colon lost), Unreal Engine,
+// Blender/Rigify, VRoid, Daz, Character Creator and SMPL skeletons name them is
 // recognised part for part and retargets onto human48 exactly as the original does
 // (animator/joint_names.hpp).
 #include <gtest/gtest.h>
@@ -26,6 +27,22 @@ struct Naming {
 
 // clang-format off
 const Naming kNamings[] = {
+    // Maya's HumanIK skeleton with its default character prefix
+    {"humanik",
+     {"Character1_Hips", "Character1_Spine", "Character1_Spine2", "Character1_Neck",
+      "Character1_Head", "Character1_LeftShoulder", "Character1_LeftArm",
+      "Character1_LeftForeArm", "Character1_LeftHand", "Character1_RightShoulder",
+      "Character1_RightArm", "Character1_RightForeArm", "Character1_RightHand",
+      "Character1_LeftUpLeg", "Character1_LeftLeg", "Character1_LeftFoot", "Character1_LeftToeBase",
+      "Character1_RightUpLeg", "Character1_RightLeg", "Character1_RightFoot",
+      "Character1_RightToeBase"}},
+    // Mixamo's rig after a tool dropped the namespace's ':' (three.js sanitizes node names so)
+    {"mixamo",
+     {"mixamorigHips", "mixamorigSpine", "mixamorigSpine2", "mixamorigNeck", "mixamorigHead",
+      "mixamorigLeftShoulder", "mixamorigLeftArm", "mixamorigLeftForeArm", "mixamorigLeftHand",
+      "mixamorigRightShoulder", "mixamorigRightArm", "mixamorigRightForeArm", "mixamorigRightHand",
+      "mixamorigLeftUpLeg", "mixamorigLeftLeg", "mixamorigLeftFoot", "mixamorigLeftToeBase",
+      "mixamorigRightUpLeg", "mixamorigRightLeg", "mixamorigRightFoot", "mixamorigRightToeBase"}},
     {"unreal",
      {"pelvis", "spine_01", "spine_03", "neck_01", "head",
       "clavicle_l", "upperarm_l", "lowerarm_l", "hand_l",
