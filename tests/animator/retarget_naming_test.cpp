@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -14,6 +13,7 @@
 #include "animator/retarget.hpp"
 #include "core/human_figure.hpp"
 #include "io/bvh.hpp"
+#include "io/read_file.hpp"
 #include "tests/fixtures/fixtures.hpp"
 
 namespace {
@@ -82,13 +82,6 @@ const Naming kNamings[] = {
 
 void PrintTo(const Naming& naming, std::ostream* os) { *os << naming.convention; }
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The BVH text with every ROOT and JOINT renamed: body parts by `renamed`, the others
 // "extra_<n>" so no leftover name means a part in the new convention.
 std::string rename_joints(const std::string& text,
@@ -117,7 +110,7 @@ TEST_P(RetargetNaming, RenamedWalkMapsPartForPartAndRetargetsTheSame) {
   PINDRAG_REQUIRE_DATA_DIR();
   const Naming& naming = GetParam();
   const std::string path = fixtures::data_dir() + "/bvh/cmu_walk_cgspeed.bvh";
-  const std::string text = read_text(path);
+  const std::string text = io::read_file(path, io::kMaxBvhBytes);
   const io::BvhImport original = io::load_bvh_string(text, path);
   const animator::BodyPartGuess parts = animator::guess_body_parts(*original.model);
   ASSERT_EQ(parts.convention, "cmu");
